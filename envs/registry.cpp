@@ -1,0 +1,67 @@
+#include "atacom/env_registry.hpp"
+
+#include <stdexcept>
+
+namespace atacom {
+
+// Each env adds one line here (a function declared next to its class).
+const std::vector<EnvEntry>& env_entries() {
+  static const std::vector<EnvEntry> entries = {
+  };
+  return entries;
+}
+
+std::vector<std::string> env_names() {
+  std::vector<std::string> names;
+  for (const auto& e : env_entries()) names.push_back(e.name);
+  return names;
+}
+
+const EnvEntry& env_entry(const std::string& name) {
+  for (const auto& e : env_entries())
+    if (e.name == name) return e;
+  std::string known;
+  for (const auto& e : env_entries()) known += (known.empty() ? "" : ", ") + e.name;
+  throw std::invalid_argument("unknown env '" + name + "' (known: " + known + ")");
+}
+
+nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::json& overrides,
+                                   const std::string& path) {
+  if (!overrides.is_object())
+    throw std::invalid_argument("config" + (path.empty() ? std::string() : " key '" + path + "'") +
+                                " must be a JSON object");
+  nlohmann::json out = base;
+  for (auto it = overrides.begin(); it != overrides.end(); ++it) {
+    const std::string key = path.empty() ? it.key() : path + "." + it.key();
+    if (!base.contains(it.key())) throw std::invalid_argument("unknown config key '" + key + "'");
+    const auto& b = base[it.key()];
+    const auto& v = it.value();
+    if (b.is_object()) {
+      out[it.key()] = merge_config_strict(b, v, key);
+    } else {
+      const bool both_numbers = b.is_number() && v.is_number();
+      const bool same = b.type() == v.type() || both_numbers || b.is_null();
+      if (!same)
+        throw std::invalid_argument("config key '" + key + "' has type " + v.type_name() + ", expected " +
+                                    b.type_name());
+      if (b.is_number_integer() && v.is_number_float())
+        throw std::invalid_argument("config key '" + key + "' must be an integer");
+      out[it.key()] = v;
+    }
+  }
+  return out;
+}
+
+nlohmann::json resolve_env_config(const std::string& name, const nlohmann::json& overrides) {
+  return merge_config_strict(env_entry(name).default_config(), overrides, "");
+}
+
+std::unique_ptr<BatchEnv> make_env(const EnvRequest& request) {
+  const EnvEntry& e = env_entry(request.name);
+  if (request.num_envs < 1) throw std::invalid_argument("number of envs must be >= 1");
+  if (request.atacom && !e.supports_atacom)
+    throw std::invalid_argument("env '" + request.name + "' has no constraint model, so ATACOM cannot wrap it");
+  return e.make(resolve_env_config(request.name, request.config), request.num_envs, request.atacom);
+}
+
+}  // namespace atacom

@@ -1,0 +1,75 @@
+// The batched environment contract: every env in this project implements it.
+//
+// One object holds N envs. reset() and step() work on all of them at once and
+// write into preallocated structure-of-arrays buffers (no allocation per step).
+// Actions are always normalised to [-1, 1]^act_dim; the env maps them to its
+// physical units. Autoreset happens in the same step: an env whose episode
+// ended writes its true last observation to final_obs and its first
+// observation of the next episode to obs, so no action and no step is lost.
+// Randomness comes from per-env streams keyed by (seed, env id): results do
+// not depend on the thread count or on how N is partitioned.
+#pragma once
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace atacom {
+
+struct EnvSpec {
+  std::string name;
+  int obs_dim = 0;
+  int act_dim = 0;
+  std::vector<float> obs_low, obs_high;       // (obs_dim) bounds of the observation
+  double dt = 0.0;                            // control period, s
+  int horizon = 0;                            // steps before truncation
+  int num_constraints = 0;                    // k: columns of EnvBuffers::constraints
+  std::vector<double> constraint_tolerance;   // (k) a row violates when c > tolerance
+  std::vector<std::string> constraint_names;  // (k)
+  std::vector<std::string> info_names;        // columns of EnvBuffers::info
+};
+
+struct EnvBuffers {
+  int N = 0;
+  std::vector<float> obs;             // (N x obs_dim) observation to act on next
+  std::vector<float> final_obs;       // (N x obs_dim) observation the last step reached (== obs unless done)
+  std::vector<float> reward;          // (N) reward of the last step
+  std::vector<float> cost;            // (N) constraint cost of the last step (max(0, max_i c_i))
+  std::vector<uint8_t> terminated;    // (N) episode ended in a terminal state (no bootstrap)
+  std::vector<uint8_t> truncated;     // (N) episode hit the horizon (bootstrap from final_obs)
+  std::vector<double> constraints;    // (N x k) constraint values at the state the step reached
+  std::vector<float> info;            // (N x info_names.size()) per-step diagnostics of the last step
+  std::vector<double> episode_return; // (N) undiscounted return of the episode that just ended
+  std::vector<int32_t> episode_length;// (N) length of the episode that just ended
+
+  void resize(const EnvSpec& spec, int N);
+  bool done(int i) const { return terminated[i] || truncated[i]; }
+};
+
+class BatchEnv {
+ public:
+  virtual ~BatchEnv() = default;
+  virtual const EnvSpec& spec() const = 0;
+  int num_envs() const { return buffers_.N; }
+  const EnvBuffers& buffers() const { return buffers_; }
+  EnvBuffers& buffers() { return buffers_; }
+
+  // Re-key every env's random stream with (seed, env id) and reset all envs.
+  virtual void seed(uint64_t seed) = 0;
+  // Reset the envs with mask[i] != 0 (all when mask == nullptr); writes obs.
+  virtual void reset(const uint8_t* mask = nullptr) = 0;
+  // Advance every env by one control step. actions: (N x act_dim), each in
+  // [-1, 1] (values outside are clipped; NaN is treated as 0 and counted in
+  // info where the env reports it). Same-step autoreset.
+  virtual void step(const double* actions) = 0;
+
+  // Snapshot/restore of the complete batch state (including RNG streams and
+  // step counters), such that restore + step reproduces the original bitwise.
+  virtual void save_state(std::ostream& out) const = 0;
+  virtual void load_state(std::istream& in) = 0;
+
+ protected:
+  EnvBuffers buffers_;
+};
+
+}  // namespace atacom
