@@ -16,6 +16,14 @@
 
 namespace atacom {
 
+// How a per-step info column becomes one number per episode.
+enum class InfoReduce : uint8_t {
+  Last = 0,  // value at the episode's last step (e.g. final_distance)
+  Sum = 1,   // summed over the episode (e.g. collision, violation counts)
+  Max = 2,   // maximum over the episode (e.g. max_constraint)
+  Mean = 3,  // mean over the episode's steps
+};
+
 struct EnvSpec {
   std::string name;
   int obs_dim = 0;
@@ -27,6 +35,7 @@ struct EnvSpec {
   std::vector<double> constraint_tolerance;   // (k) a row violates when c > tolerance
   std::vector<std::string> constraint_names;  // (k)
   std::vector<std::string> info_names;        // columns of EnvBuffers::info
+  std::vector<InfoReduce> info_reduce;        // (info_names.size()) per-episode aggregation
 };
 
 struct EnvBuffers {
