@@ -28,7 +28,7 @@ static inline vd vsel(vm m, vd a, vd b) { return m ? a : b; }
 static inline vd vclamp(vd x, double lo, double hi) { return vmin(vmax(x, splat(lo)), splat(hi)); }
 static inline vd vsqrt(vd x) {
 #if defined(__AVX512F__)
-  return (vd)_mm512_sqrt_pd((__m512d)x);  // correctly rounded, same as std::sqrt per lane
+  return (vd)_mm512_maskz_sqrt_pd(0xFF, (__m512d)x);  // correctly rounded, same as std::sqrt per lane
 #else
   vd r;
   for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
