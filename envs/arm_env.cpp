@@ -70,12 +70,13 @@ ArmRowGroup read_group(const json& j, size_t rows, const std::string& what) {
   g.margin = num_array(j.at("margin"), rows, what + ".margin");
   g.beta = num_array(j.at("beta"), rows, what + ".beta");
   g.slack_tol = num(j.at("slack_tol"), what + ".slack_tol");
-  g.tolerance = num(j.at("tolerance"), what + ".tolerance");
+  g.tolerance = num_array(j.at("tolerance"), rows, what + ".tolerance");
   return g;
 }
 
 ArmRowGroup make_group(size_t rows, double margin, double beta, double slack_tol, double tolerance) {
-  return {std::vector<double>(rows, margin), std::vector<double>(rows, beta), slack_tol, tolerance};
+  return {std::vector<double>(rows, margin), std::vector<double>(rows, beta), slack_tol,
+          std::vector<double>(rows, tolerance)};
 }
 
 int64_t now_ns() {
@@ -94,13 +95,23 @@ ArmEnvConfig default_arm_env_config(ArmTask task) {
   c.reward.desired_approach = {1.0, 0.0, 0.0};  // reach forward, gripper horizontal
   // Joint rows: 0.05 rad inside the URDF limits (the authors' base env clips
   // position targets 0.05 rad inside), beta 30 as in their joint-limit rows.
-  c.joint = make_group(2 * kArmJoints, 0.05, 30.0, 1e-6, 0.01);
-  // Distance rows: 2 cm beyond the cover radius; beta 30 / m lets the slack
-  // move freely until about 2 cm from the boundary.
+  // Tolerance 0.03 rad: rows overshoot only when conflicting rows leave the
+  // projector no feasible correction inside the action box.
+  c.joint = make_group(2 * kArmJoints, 0.05, 30.0, 1e-6, 0.03);
+  // Distance rows: margin beyond the cover radius; beta 30 / m lets the slack
+  // move freely until about 2 cm from the boundary. The distal PoIs move up to
+  // ~8 cm per step, and a first-order step around an edge of radius d
+  // overshoots by about (v dt)^2 / (2 d), so they get larger margins and
+  // tolerances (measured maxima in docs/envs_arm.md).
   c.obstacle = make_group(kArmPoi, 0.02, 30.0, 1e-6, 0.01);
   c.body = make_group(kArmPoi, 0.02, 30.0, 1e-6, 0.01);
+  const double distal_margin[3] = {0.03, 0.05, 0.05}, distal_tol[3] = {0.02, 0.04, 0.04};
+  for (int i = 0; i < 3; ++i) {  // gripper_palm, gripper_fingers, fingertips
+    c.obstacle.margin[6 + i] = c.body.margin[6 + i] = distal_margin[i];
+    c.obstacle.tolerance[6 + i] = c.body.tolerance[6 + i] = distal_tol[i];
+  }
   // Ground rows hold absolute heights (m) of the elbow and the grasping frame.
-  c.ground = make_group(2, 0.30, 30.0, 1e-6, 0.01);
+  c.ground = make_group(2, 0.30, 30.0, 1e-6, 0.02);
   // Fallback start, used only if sample_batches x 8 random starts all fail:
   // the most interior of 200k random configurations (every row <= -0.11 in
   // both scenes; checked safe at construction).
@@ -114,16 +125,16 @@ void ArmEnvConfig::validate() const {
   if (!(velocity_scale > 0.0 && velocity_scale <= 1.0)) throw std::invalid_argument("velocity_scale must be in (0, 1]");
   if (!(torso_lift >= 0.0 && torso_lift <= 0.35)) throw std::invalid_argument("torso_lift must be in [0, 0.35] m");
   auto check_group = [](const ArmRowGroup& g, size_t rows, const std::string& what, bool margin_is_height) {
-    if (g.margin.size() != rows || g.beta.size() != rows)
-      throw std::invalid_argument(what + ": margin and beta need " + std::to_string(rows) + " entries");
+    if (g.margin.size() != rows || g.beta.size() != rows || g.tolerance.size() != rows)
+      throw std::invalid_argument(what + ": margin, beta and tolerance need " + std::to_string(rows) + " entries");
     for (size_t i = 0; i < rows; ++i) {
       if (!(g.beta[i] > 0.0) || !std::isfinite(g.beta[i])) throw std::invalid_argument(what + ".beta must be > 0");
-      if (!margin_is_height && !(g.margin[i] >= g.tolerance))
+      if (!(g.tolerance[i] >= 0.0)) throw std::invalid_argument(what + ".tolerance must be >= 0");
+      if (!margin_is_height && !(g.margin[i] >= g.tolerance[i]))
         throw std::invalid_argument(what + ".margin must be >= " + what +
                                     ".tolerance, so that a row within tolerance still keeps the margin's guarantee");
     }
     if (!(g.slack_tol > 0.0 && g.slack_tol < 1.0)) throw std::invalid_argument(what + ".slack_tol must be in (0, 1)");
-    if (!(g.tolerance >= 0.0)) throw std::invalid_argument(what + ".tolerance must be >= 0");
   };
   check_group(joint, 2 * kArmJoints, "constraints.joint", false);
   check_group(obstacle, kArmPoi, "constraints.obstacle", false);
@@ -335,23 +346,23 @@ void ArmEnv::build_spec() {
   s.constraint_tolerance.clear();
   for (int j = 0; j < kArmJoints; ++j) {
     s.constraint_names.push_back(model_.joint_names[j] + "_lower");
-    s.constraint_tolerance.push_back(config_.joint.tolerance);
+    s.constraint_tolerance.push_back(config_.joint.tolerance[j]);
   }
   for (int j = 0; j < kArmJoints; ++j) {
     s.constraint_names.push_back(model_.joint_names[j] + "_upper");
-    s.constraint_tolerance.push_back(config_.joint.tolerance);
+    s.constraint_tolerance.push_back(config_.joint.tolerance[kArmJoints + j]);
   }
   for (int i = 0; i < kArmPoi; ++i) {
     s.constraint_names.push_back("obstacle_" + model_.poi[i].name);
-    s.constraint_tolerance.push_back(config_.obstacle.tolerance);
+    s.constraint_tolerance.push_back(config_.obstacle.tolerance[i]);
   }
   for (int i = 0; i < kArmPoi; ++i) {
     s.constraint_names.push_back("body_" + model_.poi[i].name);
-    s.constraint_tolerance.push_back(config_.body.tolerance);
+    s.constraint_tolerance.push_back(config_.body.tolerance[i]);
   }
   for (int r = 0; r < 2; ++r) {
     s.constraint_names.push_back("ground_" + model_.poi[config_.ground_poi[r]].name);
-    s.constraint_tolerance.push_back(config_.ground.tolerance);
+    s.constraint_tolerance.push_back(config_.ground.tolerance[r]);
   }
   s.info_names = {"collision", "joint_limit_violation", "final_distance", "distance",
                   "angle",     "in_region",             "nan_action",     "reset_fallback"};

@@ -64,7 +64,7 @@ TEST_CASE("arm env config: JSON round trip and strict parsing", "[arm_env]") {
     bad["constraints"]["obstacle"]["margin"] = {0.01, 0.02};
     CHECK_THROWS_WITH(from_json(bad, back), Catch::Contains("constraints.obstacle.margin"));
     bad = j;
-    bad["constraints"]["body"]["tolerance"] = 0.5;  // above the margins: the guarantee would be lost
+    bad["constraints"]["body"]["tolerance"] = std::vector<double>(9, 0.5);  // above the margins: the guarantee would be lost
     CHECK_THROWS_WITH(from_json(bad, back), Catch::Contains("tolerance"));
     bad = j;
     bad["scene"]["yaw_deg"] = 45;
@@ -283,5 +283,82 @@ TEST_CASE("goals are reachable: sampled from safe configurations in the goal reg
         CHECK(env.buffers().obs[e * s.obs_dim + d] >= s.obs_low[d]);
         CHECK(env.buffers().obs[e * s.obs_dim + d] <= s.obs_high[d]);
       }
+  }
+}
+
+namespace {
+struct RolloutStats {
+  int64_t steps = 0, collisions = 0, joint_violations = 0, violations = 0, episodes = 0;
+  double max_excess = -1e300;  // max over steps and rows of c - tolerance
+  double max_c = -1e300;
+};
+
+// Uniform random alpha for `steps` batched steps; with atacom the projector
+// sits between the policy and the env (as SafeEnv does).
+RolloutStats random_rollout(ArmTask task, int N, int steps, uint64_t seed, bool atacom) {
+  ArmEnv env(default_arm_env_config(task), N);
+  env.seed(seed);
+  const ProjectorModel pm = env.projector_model();
+  ProjectorBatch pb(pm, N);
+  Rng rng(seed, 1u << 20);
+  const auto& tol = env.spec().constraint_tolerance;
+  const auto& names = env.spec().info_names;
+  const size_t ni = names.size();
+  RolloutStats st;
+  for (int s = 0; s < steps; ++s) {
+    for (double& x : pb.alpha) x = rng.uniform(-1.0, 1.0);
+    if (atacom) {
+      env.constraint_model(pb, 0, N);
+      project_batch(pm, pb);
+      env.step(pb.a.data());
+    } else {
+      env.step(pb.alpha.data());
+    }
+    const EnvBuffers& b = env.buffers();
+    for (int e = 0; e < N; ++e) {
+      st.collisions += b.info[e * ni + 0] > 0;
+      st.joint_violations += b.info[e * ni + 1] > 0;
+      st.episodes += b.done(e);
+      bool v = false;
+      for (int r = 0; r < kArmRows; ++r) {
+        const double c = b.constraints[e * kArmRows + r];
+        st.max_c = std::max(st.max_c, c);
+        st.max_excess = std::max(st.max_excess, c - tol[r]);
+        v = v || c > tol[r];
+      }
+      st.violations += v;
+    }
+    st.steps += N;
+  }
+  return st;
+}
+}  // namespace
+
+TEST_CASE("ATACOM keeps random exploration safe (short)", "[arm_env]") {
+  for (ArmTask task : kTasks) {
+    const RolloutStats safe = random_rollout(task, 64, 150, 1, true);
+    CHECK(safe.collisions == 0);
+    CHECK(safe.joint_violations == 0);
+    CHECK(safe.max_excess <= 0.0);
+    const RolloutStats raw = random_rollout(task, 64, 150, 1, false);
+    CHECK(raw.collisions + raw.joint_violations > 0);
+  }
+}
+
+TEST_CASE("100k+ steps of random alpha through ATACOM: no collision, constraints within tolerance", "[arm_env][slow]") {
+  for (ArmTask task : kTasks) {
+    for (uint64_t seed : {11u, 12u, 13u}) {
+      const RolloutStats safe = random_rollout(task, 256, 500, seed, true);  // 128k env steps
+      INFO(arm_task_name(task) << " seed " << seed << " max c " << safe.max_c);
+      CHECK(safe.steps == 128000);
+      CHECK(safe.collisions == 0);
+      CHECK(safe.joint_violations == 0);
+      CHECK(safe.violations == 0);
+      CHECK(safe.max_excess <= 0.0);
+      const RolloutStats raw = random_rollout(task, 256, 500, seed, false);
+      INFO("without ATACOM: collisions " << raw.collisions << " joint violations " << raw.joint_violations);
+      CHECK(raw.collisions > 0);
+      CHECK(raw.joint_violations > 0);
+    }
   }
 }

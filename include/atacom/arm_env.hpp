@@ -49,7 +49,7 @@ struct ArmRowGroup {
   std::vector<double> margin;  // per row: joint rad; scene/body m; ground: clearance height z, m
   std::vector<double> beta;    // per row: SoftCorner slack shape
   double slack_tol = 1e-6;     // projector slack floor for the group's rows
-  double tolerance = 0.0;      // a row violates when c > tolerance (EnvSpec::constraint_tolerance)
+  std::vector<double> tolerance;  // per row: a row violates when c > tolerance (EnvSpec::constraint_tolerance)
 };
 
 struct ArmRewardConfig {
