@@ -493,14 +493,27 @@ void ArmEnv::reset_env(int e) {
     refresh(e);
     fb = 1;
   }
-  // Goal: grasping-frame position of a safe configuration inside the goal
-  // region (so every goal is reachable without touching a constraint): a
-  // library configuration, jittered so that goals cover the region densely.
   const Eigen::Vector3d start(grasp_[se * 3], grasp_[se * 3 + 1], grasp_[se * 3 + 2]);
-  found = false;
+  if (!sample_goal(e, start.data(), &goal_[se * 3])) fb = 1;
+  fallback_[e] = fb;
+  t_[e] = 0;
+  ret_[e] = 0.0;
+  write_obs(e, &buffers_.obs[se * kArmObsDim]);
+}
+
+// Goal: grasping-frame position of a safe configuration inside the goal
+// region (so every goal is reachable without touching a constraint): a
+// library configuration, jittered so that goals cover the region densely.
+bool ArmEnv::sample_goal(int e, const double* away_from, double* goal) {
+  const lanes::ArmKernelConst& k = kernel_->k;
+  Rng& rng = rng_[e];
+  lanes::ArmFkLanes fk;
+  lanes::ArmKernelOut o;
+  vd ql[kArmJoints];
+  const Eigen::Vector3d start(away_from[0], away_from[1], away_from[2]);
   const int L = static_cast<int>(goal_lib_q_.size() / kArmJoints);
   int base = 0;
-  for (int b = 0; b < config_.sample_batches && !found; ++b) {
+  for (int b = 0; b < config_.sample_batches; ++b) {
     base = static_cast<int>(rng.below(static_cast<uint64_t>(L)));
     const double* qb = &goal_lib_q_[static_cast<size_t>(base) * kArmJoints];
     for (int l = 0; l < kLanes; ++l)
@@ -509,23 +522,21 @@ void ArmEnv::reset_env(int e) {
     lanes::arm_fk_lanes(k.fk, ql, fk, false);
     lanes::arm_constraints_lanes(k, ql, fk, o, false);
     lanes::arm_ground_truth_lanes(k, ql, fk, o, kLanes);
-    for (int l = 0; l < kLanes && !found; ++l) {
+    for (int l = 0; l < kLanes; ++l) {
       const Eigen::Vector3d g(fk.grasp_p[0][l], fk.grasp_p[1][l], fk.grasp_p[2][l]);
-      if (scene_.goal_region.contains(g) && (g - start).norm() >= config_.goal_min_distance && lane_ok(l)) {
-        for (int r = 0; r < 3; ++r) goal_[se * 3 + r] = g(r);
-        found = true;
-      }
+      if (!scene_.goal_region.contains(g) || (g - start).norm() < config_.goal_min_distance) continue;
+      if (o.collision[l] || o.joint_violation[l]) continue;
+      bool ok = true;
+      for (int r = 0; r < kArmRows; ++r) ok = ok && o.c[r][l] <= -config_.init_margin;
+      if (!ok) continue;
+      for (int r = 0; r < 3; ++r) goal[r] = g(r);
+      return true;
     }
   }
-  if (!found) {  // the last library configuration itself: safe and inside the region
-    const ArmFkResult r = arm_fk_reference(model_, Eigen::Map<const ArmQ>(&goal_lib_q_[static_cast<size_t>(base) * kArmJoints]));
-    for (int c = 0; c < 3; ++c) goal_[se * 3 + c] = r.grasp.p(c);
-    fb = 1;
-  }
-  fallback_[e] = fb;
-  t_[e] = 0;
-  ret_[e] = 0.0;
-  write_obs(e, &buffers_.obs[se * kArmObsDim]);
+  // Fallback: the last library configuration itself (safe, inside the region).
+  const ArmFkResult r = arm_fk_reference(model_, Eigen::Map<const ArmQ>(&goal_lib_q_[static_cast<size_t>(base) * kArmJoints]));
+  for (int c = 0; c < 3; ++c) goal[c] = r.grasp.p(c);
+  return false;
 }
 
 void ArmEnv::build_goal_library() {

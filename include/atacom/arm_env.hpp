@@ -134,6 +134,10 @@ class ArmEnv final : public ControlAffineEnv {
   // goal, restarts its episode counters, recomputes its cached model and obs.
   void set_state(int i, const double* q, const double* goal);
   void set_goal(int i, const double* goal);  // keeps q and the episode running
+  // Draw a goal for env i from its own stream (safe configuration with the
+  // grasping frame in the goal region, at least goal_min_distance from
+  // away_from); false if it fell back to a library goal without jitter.
+  bool sample_goal(int i, const double* away_from, double* goal);
 
  private:
   struct Kernel;
