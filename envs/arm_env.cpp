@@ -284,6 +284,7 @@ ArmEnv::ArmEnv(const ArmEnvConfig& config, int num_envs) : config_(config) {
     k.items.push_back(it);
   }
   for (const ArmPoi& p : model_.poi) {
+    if (p.inside_capsule) continue;  // covered by a capsule item (the reference still checks it)
     lanes::ArmGtItem it;
     it.frame = p.frame;
     for (int r = 0; r < 3; ++r) it.a[r] = it.b[r] = p.offset(r);

@@ -2,11 +2,15 @@
 
 #include <stdexcept>
 
+#include "atacom/arm_env.hpp"
+
 namespace atacom {
 
 // Each env adds one line here (a function declared next to its class).
 const std::vector<EnvEntry>& env_entries() {
   static const std::vector<EnvEntry> entries = {
+      {"table", "TableEnv: TIAGo++ arm reaching above a table (34 constraints)", true, table_env_default_config, make_table_env},
+      {"shelf", "ShelfEnvSim: TIAGo++ arm reaching into a shelf (34 constraints)", true, shelf_env_default_config, make_shelf_env},
   };
   return entries;
 }

@@ -228,6 +228,29 @@ TiagoArmModel load_tiago_arm_model(double torso_lift) {
     if (reached < 1.0 - 1e-12) throw std::runtime_error("capsule '" + cap.name + "': cover parts end before t = 1");
   }
 
+  // PoI spheres that stay inside one capsule whatever q is: the PoI is on the
+  // capsule's body, or on the axis of the joint next to it (so it does not
+  // move relative to that body).
+  for (ArmPoi& p : m.poi) {
+    for (const ArmCapsule& cap : m.capsules) {
+      const int bc = body_of(cap.frame), bp = body_of(p.frame);
+      const Eigen::Vector3d v = to_body(m, p.frame, p.offset);
+      Eigen::Vector3d c;
+      if (bp == bc) {
+        c = v;
+      } else if (bp == bc + 1 && v.head<2>().norm() < 1e-12) {
+        c = m.joint_origin[bp].apply(v);
+      } else if (bp + 1 == bc && m.joint_origin[bc].inverse().apply(v).head<2>().norm() < 1e-12) {
+        c = m.joint_origin[bc].inverse().apply(v);
+      } else {
+        continue;
+      }
+      const Eigen::Vector3d a = to_body(m, cap.frame, cap.a), b = to_body(m, cap.frame, cap.b), ab = b - a;
+      const double t = ab.squaredNorm() > 0.0 ? std::clamp((c - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+      if ((c - (a + t * ab)).norm() + p.radius <= cap.radius && (cap.body_check || !p.body_check)) p.inside_capsule = true;
+    }
+  }
+
   m.shoulder = m.joint_origin[0].p;
   // Reach bound: sum of joint-to-joint offsets plus the farthest gripper point.
   double reach = 0.0;

@@ -148,3 +148,24 @@ TEST_CASE("missing data directory gives a clear error", "[kinematics]") {
   CHECK_THROWS_WITH(load_tiago_arm_model(0.1), Catch::Contains("ATACOM_DATA_DIR"));
   if (old) setenv("ATACOM_DATA_DIR", saved.c_str(), 1); else unsetenv("ATACOM_DATA_DIR");
 }
+
+TEST_CASE("PoI spheres marked inside a capsule stay inside it", "[kinematics]") {
+  const TiagoArmModel m = load_tiago_arm_model(0.1);
+  Rng rng(31, 0);
+  int marked = 0;
+  for (const ArmPoi& p : m.poi) marked += p.inside_capsule;
+  CHECK(marked >= 3);
+  for (int trial = 0; trial < 500; ++trial) {
+    const ArmFkResult r = arm_fk_reference(m, random_q(m, rng));
+    for (int i = 0; i < kArmPoi; ++i) {
+      if (!m.poi[i].inside_capsule) continue;
+      double best = 1e9;
+      for (const ArmCapsule& cap : m.capsules) {
+        const Eigen::Vector3d a = r.frame[cap.frame].apply(cap.a), b = r.frame[cap.frame].apply(cap.b), ab = b - a;
+        const double t = ab.squaredNorm() > 0 ? std::clamp((r.poi[i] - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+        best = std::min(best, (r.poi[i] - (a + t * ab)).norm() + m.poi[i].radius - cap.radius);
+      }
+      CHECK(best <= 1e-12);
+    }
+  }
+}

@@ -41,6 +41,9 @@ struct ArmPoi {
   Eigen::Vector3d offset;            // in the frame
   double radius = 0.0;               // sourced collision-sphere radius (ground truth)
   bool body_check = true;            // ground-truth check against the robot body
+  // The sphere lies inside a link capsule in every configuration (rigidly
+  // attached to the capsule's body): the batched ground truth skips it.
+  bool inside_capsule = false;
 };
 
 struct CoverPart {
