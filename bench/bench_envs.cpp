@@ -10,10 +10,10 @@
 // The policy is uniform random alpha (pre-drawn, cycled), so episodes end
 // and autoreset exactly as in training.
 //
-// ATACOM path: parallel constraint_model() over fixed blocks, project_batch(),
-// step() with the safe action; what SafeEnv does, timed by this program.
-// split: shares of thread time. Env sections are summed over threads by the
-// env; the projector share is its wall time x threads; rest is what is left.
+// ATACOM path: the registry's SafeEnv (constraint model + projection per
+// block, then the inner step). split: shares of thread time (wall time x
+// threads in use) from the env's profiling hooks, which sum seconds over
+// threads; SafeEnv adds "projector"; rest is what no section accounts for.
 #include <cstring>
 #include <iostream>
 #include <set>
@@ -24,9 +24,7 @@
 
 #include "atacom/env_registry.hpp"
 #include "atacom/parallel.hpp"
-#include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
-#include "atacom/safe_env.hpp"
 #include "bench/bench_common.hpp"
 
 using namespace atacom;
@@ -34,50 +32,26 @@ using namespace atacom;
 namespace {
 
 constexpr int kActionSets = 8;    // distinct pre-drawn alpha matrices, cycled
-constexpr int kModelBlock = 256;  // envs per constraint_model task
+constexpr int kBlockEnvs = 256;   // envs per parallel task in the envs and SafeEnv
 
 struct Run {
   std::unique_ptr<BatchEnv> env;
-  ControlAffineEnv* affine = nullptr;
-  ProjectorModel pm;
-  ProjectorBatch pb;
   std::vector<std::vector<double>> alpha;
   int next = 0;
-  double projector_s = 0.0;
-  bool timing = false;
 
   Run(const std::string& name, int N, bool atacom) {
-    env = make_env({name, N, false, nlohmann::json::object()});
+    env = make_env({name, N, atacom, nlohmann::json::object()});
     env->seed(1);
     const int m = env->spec().act_dim;
     Rng rng(2, 0);
     alpha.assign(kActionSets, std::vector<double>(static_cast<size_t>(N) * m));
     for (auto& a : alpha)
       for (double& x : a) x = rng.uniform(-1.0, 1.0);
-    if (atacom) {
-      affine = dynamic_cast<ControlAffineEnv*>(env.get());
-      if (!affine) throw std::invalid_argument("env '" + name + "' has no constraint model");
-      pm = affine->projector_model();
-      pb.resize(pm, N);
-    }
   }
 
   void step() {
-    const std::vector<double>& a = alpha[next];
+    env->step(alpha[next].data());
     next = (next + 1) % kActionSets;
-    if (!affine) {
-      env->step(a.data());
-      return;
-    }
-    const double t0 = timing ? bench::now_s() : 0.0;
-    const int N = env->num_envs();
-    std::memcpy(pb.alpha.data(), a.data(), sizeof(double) * a.size());
-    parallel_blocks(N, kModelBlock, [&](int64_t lo, int64_t hi) {
-      affine->constraint_model(pb, static_cast<int>(lo), static_cast<int>(hi));
-    });
-    project_batch(pm, pb);
-    if (timing) projector_s += bench::now_s() - t0;
-    env->step(pb.a.data());
   }
 };
 
@@ -126,15 +100,13 @@ int main(int argc, char** argv) {
             // Time split from a separate profiled pass (profiling adds clock reads).
             const std::vector<std::string> sections = run.env->profile_sections();
             run.env->set_profiling(true);
-            run.timing = true;
-            run.projector_s = 0.0;
             const int split_steps = std::max(20, static_cast<int>(2e5 / N));
             const double t0 = bench::now_s();
             for (int s = 0; s < split_steps; ++s) run.step();
             const double wall = bench::now_s() - t0;
             const std::vector<double> secs = run.env->profile_seconds();
             run.env->set_profiling(false);
-            const int used_threads = std::min(threads, std::max(1, (N + kModelBlock - 1) / kModelBlock));
+            const int used_threads = std::min(threads, std::max(1, (N + kBlockEnvs - 1) / kBlockEnvs));
             const double thread_time = wall * used_threads;
             nlohmann::json split = nlohmann::json::object();
             double accounted = 0.0;
@@ -142,10 +114,6 @@ int main(int argc, char** argv) {
               if (sections[i] == "rest") continue;  // recomputed below from the total
               split[sections[i]] = secs[i] / thread_time;
               accounted += secs[i];
-            }
-            if (atacom) {
-              split["projector"] = run.projector_s * used_threads / thread_time;
-              accounted += run.projector_s * used_threads;
             }
             split["rest"] = std::max(0.0, 1.0 - accounted / thread_time);
             bench::emit({{"bench", "env_step"},

@@ -399,11 +399,11 @@ void ArmEnv::constraint_model(ProjectorBatch& pb, int begin, int end) const {
     std::memcpy(&pb.c[se * kArmRows], &c_[se * kArmRows], sizeof(double) * kArmRows);
     for (int j = 0; j < n; ++j) pb.G[se * n + j] = vmax_[j];
     double* Jq = &pb.Jq[se * kArmRows * n];
-    std::memset(Jq, 0, sizeof(double) * kRowScene * n);
-    for (int j = 0; j < n; ++j) {
-      Jq[(kRowJointLower + j) * n + j] = -1.0;
-      Jq[(kRowJointUpper + j) * n + j] = 1.0;
-    }
+    for (int j = 0; j < n; ++j)  // joint rows: -e_j (lower), +e_j (upper)
+      for (int c = 0; c < n; ++c) {
+        Jq[(kRowJointLower + j) * n + c] = c == j ? -1.0 : 0.0;
+        Jq[(kRowJointUpper + j) * n + c] = c == j ? 1.0 : 0.0;
+      }
     std::memcpy(Jq + kRowScene * n, &J_[se * kArmDynamicRows * n], sizeof(double) * kArmDynamicRows * n);
   }
 }

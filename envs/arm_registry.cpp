@@ -12,9 +12,8 @@ std::unique_ptr<BatchEnv> make_arm(ArmTask task, const nlohmann::json& config, i
   from_json(config, c);
   auto env = std::make_unique<ArmEnv>(c, num_envs);
   if (!atacom) return env;
-  // SafeEnv (the generic wrapper) is not in this build yet; callers that need
-  // ATACOM now drive ArmEnv::constraint_model + project_batch themselves.
-  throw std::invalid_argument("env '" + arm_task_name(task) + "': ATACOM wrapping needs SafeEnv, not in this build yet");
+  const ProjectorModel pm = env->projector_model();
+  return std::make_unique<SafeEnv>(std::move(env), pm);
 }
 }  // namespace
 

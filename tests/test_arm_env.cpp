@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "atacom/arm_env.hpp"
+#include "atacom/env_registry.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 
@@ -293,28 +294,21 @@ struct RolloutStats {
   double max_c = -1e300;
 };
 
-// Uniform random alpha for `steps` batched steps; with atacom the projector
-// sits between the policy and the env (as SafeEnv does).
+// Uniform random alpha for `steps` batched steps through the registry's env,
+// with SafeEnv (ATACOM) between the policy and the env or without it.
 RolloutStats random_rollout(ArmTask task, int N, int steps, uint64_t seed, bool atacom) {
-  ArmEnv env(default_arm_env_config(task), N);
-  env.seed(seed);
-  const ProjectorModel pm = env.projector_model();
-  ProjectorBatch pb(pm, N);
+  std::unique_ptr<BatchEnv> env = make_env({arm_task_name(task), N, atacom, nlohmann::json::object()});
+  env->seed(seed);
   Rng rng(seed, 1u << 20);
-  const auto& tol = env.spec().constraint_tolerance;
-  const auto& names = env.spec().info_names;
-  const size_t ni = names.size();
+  const EnvSpec& spec = env->spec();
+  const auto& tol = spec.constraint_tolerance;
+  const size_t ni = spec.info_names.size();
+  std::vector<double> alpha(static_cast<size_t>(N) * spec.act_dim);
   RolloutStats st;
   for (int s = 0; s < steps; ++s) {
-    for (double& x : pb.alpha) x = rng.uniform(-1.0, 1.0);
-    if (atacom) {
-      env.constraint_model(pb, 0, N);
-      project_batch(pm, pb);
-      env.step(pb.a.data());
-    } else {
-      env.step(pb.alpha.data());
-    }
-    const EnvBuffers& b = env.buffers();
+    for (double& x : alpha) x = rng.uniform(-1.0, 1.0);
+    env->step(alpha.data());
+    const EnvBuffers& b = env->buffers();
     for (int e = 0; e < N; ++e) {
       st.collisions += b.info[e * ni + 0] > 0;
       st.joint_violations += b.info[e * ni + 1] > 0;
@@ -348,14 +342,14 @@ TEST_CASE("ATACOM keeps random exploration safe (short)", "[arm_env]") {
 TEST_CASE("100k+ steps of random alpha through ATACOM: no collision, constraints within tolerance", "[arm_env][slow]") {
   for (ArmTask task : kTasks) {
     for (uint64_t seed : {11u, 12u, 13u}) {
-      const RolloutStats safe = random_rollout(task, 256, 500, seed, true);  // 128k env steps
+      const RolloutStats safe = random_rollout(task, 512, 500, seed, true);  // 256k env steps
       INFO(arm_task_name(task) << " seed " << seed << " max c " << safe.max_c);
-      CHECK(safe.steps == 128000);
+      CHECK(safe.steps == 256000);
       CHECK(safe.collisions == 0);
       CHECK(safe.joint_violations == 0);
       CHECK(safe.violations == 0);
       CHECK(safe.max_excess <= 0.0);
-      const RolloutStats raw = random_rollout(task, 256, 500, seed, false);
+      const RolloutStats raw = random_rollout(task, 512, 500, seed, false);
       INFO("without ATACOM: collisions " << raw.collisions << " joint violations " << raw.joint_violations);
       CHECK(raw.collisions > 0);
       CHECK(raw.joint_violations > 0);
