@@ -20,6 +20,7 @@ using lanes::kLanes;
 using lanes::vd;
 
 constexpr int kBlockEnvs = 256;  // envs per parallel task: fixed, so results never depend on threads
+static_assert(kBlockEnvs % kLanes == 0, "lane groups must not straddle parallel blocks");
 
 // Info columns, in order.
 enum InfoCol : int {
@@ -310,7 +311,7 @@ ArmEnv::ArmEnv(const ArmEnvConfig& config, int num_envs) : config_(config) {
   rng_.assign(N, Rng());
   fallback_.assign(N, 0);
   c_.assign(N * kArmRows, 0.0);
-  J_.assign(N * kArmDynamicRows * kArmJoints, 0.0);
+  J_.assign(((N + kLanes - 1) / kLanes) * kLanes * kArmDynamicRows * kArmJoints, 0.0);
   grasp_.assign(N * 3, 0.0);
   approach_.assign(N * 3, 0.0);
   buffers_.resize(spec_, num_envs);
@@ -404,7 +405,8 @@ void ArmEnv::constraint_model(ProjectorBatch& pb, int begin, int end) const {
         Jq[(kRowJointLower + j) * n + c] = c == j ? -1.0 : 0.0;
         Jq[(kRowJointUpper + j) * n + c] = c == j ? 1.0 : 0.0;
       }
-    std::memcpy(Jq + kRowScene * n, &J_[se * kArmDynamicRows * n], sizeof(double) * kArmDynamicRows * n);
+    const double* Jl = &J_[(se / kLanes) * kLanes * kArmDynamicRows * n + se % kLanes];
+    for (int r = 0; r < kArmDynamicRows * n; ++r) Jq[kRowScene * n + r] = Jl[r * kLanes];
   }
 }
 
@@ -428,12 +430,16 @@ void ArmEnv::write_obs(int e, float* obs) const {
 }
 
 namespace {
-// Copy lane l of a kernel evaluation into env e's cached model.
-void store_lane(const lanes::ArmFkLanes& fk, const lanes::ArmKernelOut& o, int l, double* c, double* J, double* grasp,
-                double* approach) {
+// Copy lane l of a kernel evaluation into env e's cached model. J is the
+// env's lane group in the lane-major Jacobian cache (element-major, lane-minor).
+void store_lane(const lanes::ArmFkLanes& fk, const lanes::ArmKernelOut& o, int l, int e, double* c, double* J_cache,
+                double* grasp, double* approach, bool with_jacobian = true) {
   for (int r = 0; r < kArmRows; ++r) c[r] = o.c[r][l];
-  for (int r = 0; r < kArmDynamicRows; ++r)
-    for (int j = 0; j < kArmJoints; ++j) J[r * kArmJoints + j] = o.J[r][j][l];
+  if (with_jacobian) {
+    double* J = J_cache + static_cast<size_t>(e / kLanes) * kLanes * kArmDynamicRows * kArmJoints + e % kLanes;
+    for (int r = 0; r < kArmDynamicRows; ++r)
+      for (int j = 0; j < kArmJoints; ++j) J[(r * kArmJoints + j) * kLanes] = o.J[r][j][l];
+  }
   for (int r = 0; r < 3; ++r) {
     grasp[r] = fk.grasp_p[r][l];
     approach[r] = o.approach[r][l];
@@ -450,8 +456,7 @@ void ArmEnv::refresh(int e) {
   lanes::arm_fk_lanes(k.fk, ql, fk, true);
   lanes::arm_constraints_lanes(k, ql, fk, o, true);
   const size_t se = static_cast<size_t>(e);
-  store_lane(fk, o, 0, &c_[se * kArmRows], &J_[se * kArmDynamicRows * kArmJoints], &grasp_[se * 3],
-             &approach_[se * 3]);
+  store_lane(fk, o, 0, e, &c_[se * kArmRows], J_.data(), &grasp_[se * 3], &approach_[se * 3]);
   write_obs(e, &buffers_.obs[se * kArmObsDim]);
 }
 
@@ -483,8 +488,7 @@ void ArmEnv::reset_env(int e) {
     for (int l = 0; l < kLanes && !found; ++l)
       if (lane_ok(l)) {
         for (int j = 0; j < kArmJoints; ++j) q_[se * kArmJoints + j] = ql[j][l];
-        store_lane(fk, o, l, &c_[se * kArmRows], &J_[se * kArmDynamicRows * kArmJoints], &grasp_[se * 3],
-                   &approach_[se * 3]);
+        store_lane(fk, o, l, e, &c_[se * kArmRows], J_.data(), &grasp_[se * 3], &approach_[se * 3]);
         found = true;
       }
   }
@@ -646,10 +650,17 @@ void ArmEnv::eval_group(int e0, int cnt, const double* actions) {
   // 3. Reward, termination, observation, autoreset.
   EnvBuffers& B = buffers_;
   const ArmRewardConfig& rw = config_.reward;
+  // Jacobians of the whole lane group in one go (e0 is a multiple of kLanes;
+  // lanes past N are padding). Resets below overwrite their own lane.
+  {
+    double* Jg = &J_[static_cast<size_t>(e0) * kArmDynamicRows * kArmJoints];
+    for (int r = 0; r < kArmDynamicRows; ++r)
+      for (int j = 0; j < kArmJoints; ++j) std::memcpy(Jg + (r * kArmJoints + j) * kLanes, &o.J[r][j], sizeof(vd));
+  }
   for (int l = 0; l < cnt; ++l) {
     const int ei = e0 + l;
     const size_t e = static_cast<size_t>(ei);
-    store_lane(fk, o, l, &c_[e * kArmRows], &J_[e * kArmDynamicRows * kArmJoints], &grasp_[e * 3], &approach_[e * 3]);
+    store_lane(fk, o, l, ei, &c_[e * kArmRows], J_.data(), &grasp_[e * 3], &approach_[e * 3], false);
     const Eigen::Vector3d g(grasp_[e * 3], grasp_[e * 3 + 1], grasp_[e * 3 + 2]);
     const Eigen::Vector3d goal(goal_[e * 3], goal_[e * 3 + 1], goal_[e * 3 + 2]);
     const Eigen::Vector3d ax(approach_[e * 3], approach_[e * 3 + 1], approach_[e * 3 + 2]);

@@ -97,7 +97,7 @@ static inline void arm_ground_truth_lanes(const ArmKernelConst& k, const vd* q, 
         if (!cand[l] || hit[l]) continue;
         const Eigen::Vector3d a(A[0][l], A[1][l], A[2][l]), b(B[0][l], B[1][l], B[2][l]);
         for (int s = 0; s < n; ++s)
-          if (segment_distance(shapes[s], a, b) < it.radius) {
+          if (!segment_clear(shapes[s], a, b, it.radius)) {
             hit[l] = -1;
             break;
           }

@@ -122,6 +122,42 @@ double segment_distance(const Shape& s, const Eigen::Vector3d& a, const Eigen::V
   return std::min({f(0.0), f(1.0), f1, f2});
 }
 
+bool segment_clear(const Shape& s, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) {
+  const Eigen::Vector3d ab = b - a;
+  const double len = ab.norm();
+  auto f = [&](double t) { return shape_distance(s, a + t * ab); };
+  const double fm = f(0.5);
+  if (fm - 0.5 * len >= r) return true;  // every point is within len/2 of the midpoint
+  if (fm < r) return false;
+  if (len == 0.0) return true;
+  constexpr double kInvPhi = 0.6180339887498949;
+  double lo = 0.0, hi = 1.0;
+  double x1 = hi - kInvPhi * (hi - lo), x2 = lo + kInvPhi * (hi - lo);
+  double f1 = f(x1), f2 = f(x2);
+  if (std::min({f1, f2, f(0.0), f(1.0)}) < r) return false;
+  while ((hi - lo) * len > 1e-9) {
+    // The convex f has its minimum in [lo, hi]; it is at least
+    // min(f1, f2) - len * (hi - lo) there.
+    if (std::min(f1, f2) - len * (hi - lo) >= r) return true;
+    if (f1 <= f2) {
+      hi = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = hi - kInvPhi * (hi - lo);
+      f1 = f(x1);
+      if (f1 < r) return false;
+    } else {
+      lo = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = lo + kInvPhi * (hi - lo);
+      f2 = f(x2);
+      if (f2 < r) return false;
+    }
+  }
+  return std::min(f1, f2) >= r;
+}
+
 double smooth_min(double a, double b, double k, double* wa) {
   double h = k > 0.0 ? std::clamp(0.5 + 0.5 * (b - a) / k, 0.0, 1.0) : (a <= b ? 1.0 : 0.0);
   if (wa) *wa = h;

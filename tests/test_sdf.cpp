@@ -135,3 +135,21 @@ TEST_CASE("SIMD lanes compute the scalar distances", "[sdf]") {
     }
   }
 }
+
+TEST_CASE("segment_clear agrees with segment_distance", "[sdf]") {
+  Rng rng(6, 0);
+  int clear = 0, blocked = 0;
+  for (const Shape& s : sample_shapes()) {
+    for (int i = 0; i < 3000; ++i) {
+      const Vector3d a = random_point(rng), b = random_point(rng);
+      const double r = rng.uniform(0.0, 0.3);
+      const double d = segment_distance(s, a, b);
+      if (std::abs(d - r) < 1e-8) continue;  // within the search resolution
+      const bool c = segment_clear(s, a, b, r);
+      CHECK(c == (d >= r));
+      (c ? clear : blocked)++;
+    }
+  }
+  CHECK(clear > 1000);
+  CHECK(blocked > 1000);
+}

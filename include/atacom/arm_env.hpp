@@ -166,7 +166,7 @@ class ArmEnv final : public ControlAffineEnv {
   std::vector<uint8_t> fallback_;  // (N)      1 if the last reset used a fallback (home or region centre)
   // cached model of the current state, written by eval_group()/reset_env()
   std::vector<double> c_;          // (N x 34)      constraint values
-  std::vector<double> J_;          // (N x 20 x 7)  Jacobians of rows 14..33
+  std::vector<double> J_;          // (ceil(N/8) x 20 x 7 x 8) Jacobians of rows 14..33, lane-major per group of 8 envs
   std::vector<double> grasp_;      // (N x 3)       grasping-frame position
   std::vector<double> approach_;   // (N x 3)       approach axis (grasping frame x)
   uint64_t seed_ = 0;

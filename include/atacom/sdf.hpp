@@ -67,6 +67,12 @@ double union_distance_exact(const ShapeUnion& u, const Eigen::Vector3d& p, int* 
 // 1e-9 m of the true minimum.
 double segment_distance(const Shape& s, const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 
+// Whether the segment stays at distance >= r from the convex shape, i.e.
+// segment_distance(s, a, b) >= r, answered with early exits: a bound from the
+// midpoint (1-Lipschitz distance), a sample below r, or a bracket whose
+// Lipschitz lower bound clears r. Same 1e-9 m resolution.
+bool segment_clear(const Shape& s, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r);
+
 // Smooth minimum pair rule (exposed for the tests).
 double smooth_min(double a, double b, double k, double* wa = nullptr);
 
