@@ -393,20 +393,76 @@ ProjectorModel ArmEnv::projector_model() const {
   return pm;
 }
 
+namespace {
+// Joint-limit rows of J_q: -e_j (rows 0..6), +e_j (rows 7..13); constant.
+struct JointRows {
+  double v[kRowScene * kArmJoints];
+  JointRows() {
+    for (int j = 0; j < kArmJoints; ++j)
+      for (int c = 0; c < kArmJoints; ++c) {
+        v[(kRowJointLower + j) * kArmJoints + c] = c == j ? -1.0 : 0.0;
+        v[(kRowJointUpper + j) * kArmJoints + c] = c == j ? 1.0 : 0.0;
+      }
+  }
+};
+const JointRows kJointRows;
+
+// 8x8 transpose in registers: in[k][l] -> out[l][k].
+inline void transpose8(const vd* in, vd* out) {
+  using lanes::vm;
+  const vm lo1 = {0, 8, 2, 10, 4, 12, 6, 14}, hi1 = {1, 9, 3, 11, 5, 13, 7, 15};
+  const vm lo2 = {0, 1, 8, 9, 4, 5, 12, 13}, hi2 = {2, 3, 10, 11, 6, 7, 14, 15};
+  const vm lo4 = {0, 1, 2, 3, 8, 9, 10, 11}, hi4 = {4, 5, 6, 7, 12, 13, 14, 15};
+  vd t[8], u[8];
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = __builtin_shuffle(in[2 * i], in[2 * i + 1], lo1);
+    t[2 * i + 1] = __builtin_shuffle(in[2 * i], in[2 * i + 1], hi1);
+  }
+  for (int h = 0; h < 2; ++h) {  // rows 0-3 and 4-7
+    const vd* q = t + 4 * h;
+    u[4 * h + 0] = __builtin_shuffle(q[0], q[2], lo2);
+    u[4 * h + 2] = __builtin_shuffle(q[0], q[2], hi2);
+    u[4 * h + 1] = __builtin_shuffle(q[1], q[3], lo2);
+    u[4 * h + 3] = __builtin_shuffle(q[1], q[3], hi2);
+  }
+  for (int i = 0; i < 4; ++i) {
+    out[i] = __builtin_shuffle(u[i], u[4 + i], lo4);
+    out[4 + i] = __builtin_shuffle(u[i], u[4 + i], hi4);
+  }
+}
+}  // namespace
+
 void ArmEnv::constraint_model(ProjectorBatch& pb, int begin, int end) const {
   constexpr int n = kArmJoints;
+  constexpr int kDyn = kArmDynamicRows * n;  // 140 Jacobian entries per env from the lane-major cache
   for (int e = begin; e < end; ++e) {
     const size_t se = static_cast<size_t>(e);
     std::memcpy(&pb.c[se * kArmRows], &c_[se * kArmRows], sizeof(double) * kArmRows);
-    for (int j = 0; j < n; ++j) pb.G[se * n + j] = vmax_[j];
-    double* Jq = &pb.Jq[se * kArmRows * n];
-    for (int j = 0; j < n; ++j)  // joint rows: -e_j (lower), +e_j (upper)
-      for (int c = 0; c < n; ++c) {
-        Jq[(kRowJointLower + j) * n + c] = c == j ? -1.0 : 0.0;
-        Jq[(kRowJointUpper + j) * n + c] = c == j ? 1.0 : 0.0;
+    std::memcpy(&pb.G[se * n], vmax_.data(), sizeof(double) * n);
+    std::memcpy(&pb.Jq[se * kArmRows * n], kJointRows.v, sizeof kJointRows.v);
+  }
+  // Dynamic rows: whole lane groups by 8x8 register transposes, the rest
+  // (partial groups at the range ends, the last 4 entries) element by element.
+  int e = begin;
+  while (e < end) {
+    const size_t se = static_cast<size_t>(e);
+    const double* Jg = &J_[(se / kLanes) * kLanes * kDyn];
+    if (e % kLanes == 0 && e + kLanes <= end) {
+      int k = 0;
+      for (; k + kLanes <= kDyn; k += kLanes) {
+        vd in[kLanes], out[kLanes];
+        for (int r = 0; r < kLanes; ++r) in[r] = lanes::load(Jg + static_cast<size_t>(k + r) * kLanes);
+        transpose8(in, out);
+        for (int l = 0; l < kLanes; ++l) lanes::store(&pb.Jq[(se + l) * kArmRows * n + kRowScene * n + k], out[l]);
       }
-    const double* Jl = &J_[(se / kLanes) * kLanes * kArmDynamicRows * n + se % kLanes];
-    for (int r = 0; r < kArmDynamicRows * n; ++r) Jq[kRowScene * n + r] = Jl[r * kLanes];
+      for (; k < kDyn; ++k)
+        for (int l = 0; l < kLanes; ++l) pb.Jq[(se + l) * kArmRows * n + kRowScene * n + k] = Jg[k * kLanes + l];
+      e += kLanes;
+    } else {
+      const double* Jl = Jg + se % kLanes;
+      for (int k = 0; k < kDyn; ++k) pb.Jq[se * kArmRows * n + kRowScene * n + k] = Jl[k * kLanes];
+      ++e;
+    }
   }
 }
 
@@ -655,7 +711,7 @@ void ArmEnv::eval_group(int e0, int cnt, const double* actions) {
   {
     double* Jg = &J_[static_cast<size_t>(e0) * kArmDynamicRows * kArmJoints];
     for (int r = 0; r < kArmDynamicRows; ++r)
-      for (int j = 0; j < kArmJoints; ++j) std::memcpy(Jg + (r * kArmJoints + j) * kLanes, &o.J[r][j], sizeof(vd));
+      for (int j = 0; j < kArmJoints; ++j) lanes::store(Jg + (r * kArmJoints + j) * kLanes, o.J[r][j]);
   }
   for (int l = 0; l < cnt; ++l) {
     const int ei = e0 + l;

@@ -20,6 +20,12 @@ constexpr int kLanes = 8;
 typedef double vd __attribute__((vector_size(kLanes * sizeof(double))));
 typedef int64_t vm __attribute__((vector_size(kLanes * sizeof(int64_t))));  // lane masks (-1 / 0)
 
+// Unaligned whole-vector load/store (a 64-byte memcpy would be split into
+// 256-bit moves through the stack, which defeats store-to-load forwarding).
+typedef double vd_unaligned __attribute__((vector_size(kLanes * sizeof(double)), aligned(alignof(double))));
+static inline vd load(const double* p) { return *reinterpret_cast<const vd_unaligned*>(p); }
+static inline void store(double* p, vd v) { *reinterpret_cast<vd_unaligned*>(p) = v; }
+
 static inline vd splat(double x) { return vd{} + x; }
 static inline vd vmin(vd a, vd b) { return a < b ? a : b; }
 static inline vd vmax(vd a, vd b) { return a > b ? a : b; }
