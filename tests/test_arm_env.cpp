@@ -205,9 +205,10 @@ TEST_CASE("shoulder links cannot reach the base or the head", "[arm_env]") {
 TEST_CASE("arm env is deterministic across thread counts", "[arm_env]") {
   for (ArmTask task : kTasks) {
     const int N = 600;  // several parallel blocks
-    uint64_t hashes[2];
-    for (int t = 0; t < 2; ++t) {
-      set_num_threads(t + 1);
+    uint64_t hashes[3];
+    const int threads[3] = {1, 2, 4};
+    for (int t = 0; t < 3; ++t) {
+      set_num_threads(threads[t]);
       ArmEnv env(default_arm_env_config(task), N);
       env.seed(42);
       Rng rng(43, 0);
@@ -216,6 +217,7 @@ TEST_CASE("arm env is deterministic across thread counts", "[arm_env]") {
     }
     set_num_threads(0);
     CHECK(hashes[0] == hashes[1]);
+    CHECK(hashes[0] == hashes[2]);
     // Another seed gives another state.
     ArmEnv other(default_arm_env_config(task), N);
     other.seed(41);
