@@ -358,3 +358,18 @@ TEST_CASE("100k+ steps of random alpha through ATACOM: no collision, constraints
     }
   }
 }
+
+TEST_CASE("set_state places an env and refreshes its model and observation", "[arm_env]") {
+  ArmEnv env(default_arm_env_config(ArmTask::Table), 3);
+  const auto& home = env.config().home;
+  const double goal[3] = {0.6, -0.3, 0.8};
+  env.set_state(1, home.data(), goal);
+  const ArmEval ev = env.evaluate_reference(home.data());
+  for (int r = 0; r < 3; ++r) {
+    CHECK(env.grasp()[3 + r] == Approx(ev.grasp_p(r)).margin(1e-12));
+    CHECK(env.buffers().obs[kArmObsDim + 7 + r] == static_cast<float>(goal[r]));
+  }
+  ProjectorBatch pb(env.projector_model(), 3);
+  env.constraint_model(pb, 1, 2);
+  for (int r = 0; r < kArmRows; ++r) CHECK(std::abs(pb.c[kArmRows + r] - ev.c(r)) < 1e-12);
+}
