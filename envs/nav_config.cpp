@@ -41,6 +41,7 @@ void validate(const NavConfig& c) {
   const double reach = std::max(c.tiago.radius + c.constraints.wall_margin, c.fetch.radius);
   require(sx + reach < c.room.x && sy + reach < c.room.y,
           "spawn area (spawn_fraction * room) plus the robot radius and wall margin must fit inside the room");
+  // Every start must satisfy the clearance row.
   require(std::isfinite(c.room.min_start_separation) &&
               c.room.min_start_separation > c.tiago.radius + c.fetch.radius + c.constraints.fetch_margin,
           "room.min_start_separation must exceed tiago.radius + fetch.radius + constraints.fetch_margin");

@@ -73,16 +73,22 @@ struct NavConfig {
     double collision_reward = -1000.0;
   } reward;
 
-  // Geometry and ATACOM slack settings of the 5 constraint rows.
+  // Geometry and ATACOM slack settings of the 5 constraint rows
+  // (docs/envs_nav.md explains the choices).
   struct Constraints {
-    double wall_margin = 0.1;
-    double fetch_margin = 0.1;
-    std::string slack = "soft_corner";
+    double wall_margin = 0.1;       // m, reference 3.5
+    double fetch_margin = 0.1;      // m, reference 3.5
+    std::string slack = "softcorner";
     std::string basis = "projected";
-    double wall_beta = 10.0;
+    // Slack shape and floor per row. An active row weighs 1 / a(s)^2 in the
+    // projection; where Fetch pins TIAGo against a wall the rows conflict and
+    // the exact, static walls must win: a_wall(s) << a_fetch(tol_fetch) for
+    // every s TIAGo can cover in one step (v_max dt = 3.3 cm):
+    // e^{3 * 0.033} - 1 = 0.10 < e^{3 * 0.1} - 1 = 0.35.
+    double wall_beta = 3.0;
     double wall_tol = 1e-6;
     double fetch_beta = 3.0;
-    double fetch_tol = 1e-6;
+    double fetch_tol = 0.1;
     double violation_tolerance = 1e-3;  // EnvSpec::constraint_tolerance of every row, m
   } constraints;
 
