@@ -2,9 +2,9 @@
 // share of step time spent inside Box2D.
 //
 // One JSON line per configuration: N in {1, 256, 4096}, threads in {1, 2},
-// atacom in {false, true}. Random alpha in [-1, 1]^2 (16 precomputed
-// batches, cycled). With ATACOM a step is constraint_model -> project_batch
-// -> step, the sequence SafeEnv runs. Throughput is the best of 5 rounds of
+// atacom in {false, true}, envs built by the registry (with ATACOM: SafeEnv
+// around NavEnv, as training uses it). Random alpha in [-1, 1]^2 (16
+// precomputed batches, cycled). Throughput is the best of 5 rounds of
 // at least 0.3 s; the Box2D share comes from a separate round with the env's
 // profiling hooks on (they add two clock reads per block and section).
 //
@@ -17,9 +17,9 @@
 #include <cstring>
 #include <vector>
 
+#include "atacom/env_registry.hpp"
 #include "atacom/nav_env.hpp"
 #include "atacom/parallel.hpp"
-#include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
 #include "bench_common.hpp"
 
@@ -41,27 +41,17 @@ int main(int argc, char** argv) {
     for (bool atacom : {false, true}) {
       for (int threads : threads_list) {
         set_num_threads(threads);
-        NavEnv env(cfg, N);
-        env.seed(1);
-        const ProjectorModel model = env.projector_model();
-        ProjectorBatch pb(model, N);
+        EnvRequest req;
+        req.name = "nav";
+        req.num_envs = N;
+        req.atacom = atacom;
+        std::unique_ptr<BatchEnv> env = make_env(req);
+        env->seed(1);
         int call = 0;
-        auto step = [&] {
-          const std::vector<double>& a = alpha[call++ % batches];
-          if (atacom) {
-            parallel_blocks(N, cfg.block, [&](int64_t lo, int64_t hi) {
-              env.constraint_model(pb, static_cast<int>(lo), static_cast<int>(hi));
-            });
-            std::copy(a.begin(), a.end(), pb.alpha.begin());
-            project_batch(model, pb);
-            env.step(pb.a.data());
-          } else {
-            env.step(a.data());
-          }
-        };
+        auto step = [&] { env->step(alpha[call++ % batches].data()); };
         const double t = bench::best_seconds_per_call(step, quick ? 3 : 5, 0.3);
         // Profiled round for the Box2D share.
-        env.set_profiling(true);
+        env->set_profiling(true);
         long calls = 0;
         const double t0 = bench::now_s();
         double t1 = t0;
@@ -70,8 +60,8 @@ int main(int argc, char** argv) {
           ++calls;
           t1 = bench::now_s();
         } while (t1 - t0 < 0.3);
-        const std::vector<double> sec = env.profile_seconds();
-        env.set_profiling(false);
+        const std::vector<double> sec = env->profile_seconds();
+        env->set_profiling(false);
         const int blocks = (N + cfg.block - 1) / cfg.block;
         const int busy = std::min(threads, blocks);
         const double steps = static_cast<double>(calls) * N;

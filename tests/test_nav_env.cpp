@@ -8,9 +8,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "atacom/env_registry.hpp"
 #include "atacom/nav_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
+#include "atacom/safe_env.hpp"
 #include "atacom/rng.hpp"
 
 using namespace atacom;
@@ -568,32 +570,30 @@ struct CollisionTally {
   long total() const { return wall + robot; }
 };
 
-// 100k steps (200 envs x 500) of uniform random alpha; with atacom the
-// alpha goes through the batched projector before the env steps.
+// 100k steps (200 envs x 500) of uniform random alpha through the registry's
+// env; with atacom it is the SafeEnv wrapper (projector between alpha and
+// the env), as the trainer uses it.
 CollisionTally random_alpha_rollout(bool atacom, uint64_t seed) {
   const int N = 200, T = 500;
-  NavEnv env(default_nav_config(), N);
-  env.seed(seed);
-  const ProjectorModel model = env.projector_model();
-  ProjectorBatch pb(model, N);
+  EnvRequest req;
+  req.name = "nav";
+  req.num_envs = N;
+  req.atacom = atacom;
+  std::unique_ptr<BatchEnv> env = make_env(req);
+  env->seed(seed);
+  const size_t ni = env->spec().info_names.size();
   std::vector<double> alpha;
   CollisionTally tally;
   for (int t = 0; t < T; ++t) {
     random_actions(N, t, alpha);
-    if (atacom) {
-      env.constraint_model(pb, 0, N);
-      std::copy(alpha.begin(), alpha.end(), pb.alpha.begin());
-      project_batch(model, pb);
-      env.step(pb.a.data());
-    } else {
-      env.step(alpha.data());
-    }
+    env->step(alpha.data());
+    const EnvBuffers& b = env->buffers();
     for (int i = 0; i < N; ++i) {
-      const float* info = &env.buffers().info[kNavInfoCount * i];
+      const float* info = &b.info[ni * i];
       tally.wall += info[kNavInfoWallCollision] > 0.0f;
       tally.robot += info[kNavInfoRobotCollision] > 0.0f;
-      tally.episodes += env.buffers().done(i);
-      for (int r = 0; r < 4; ++r) tally.worst_wall_c = std::max(tally.worst_wall_c, env.buffers().constraints[5 * i + r]);
+      tally.episodes += b.done(i);
+      for (int r = 0; r < 4; ++r) tally.worst_wall_c = std::max(tally.worst_wall_c, b.constraints[5 * i + r]);
     }
     tally.steps += N;
   }
@@ -630,4 +630,64 @@ TEST_CASE("nav env: 100k steps of random alpha, collision rate with and without 
                 << ", ratio " << ratio);
   REQUIRE(plain_all.total() > 250);
   REQUIRE(ratio >= 6.0);
+}
+
+TEST_CASE("nav env: registry builds the plain and the ATACOM-wrapped env", "[nav_env]") {
+  EnvRequest req;
+  req.name = "nav";
+  req.num_envs = 8;
+  auto plain = make_env(req);
+  REQUIRE(dynamic_cast<NavEnv*>(plain.get()) != nullptr);
+  req.atacom = true;
+  req.config = {{"constraints", {{"fetch_beta", 2.0}}}, {"horizon", 100}};
+  auto safe = make_env(req);
+  auto* wrapped = dynamic_cast<SafeEnv*>(safe.get());
+  REQUIRE(wrapped != nullptr);
+  REQUIRE(safe->spec().horizon == 100);
+  REQUIRE(wrapped->model().beta[4] == 2.0);
+  REQUIRE(wrapped->model().K_c == Approx(30.0));
+  REQUIRE(wrapped->model().p == 2);
+  REQUIRE_FALSE(wrapped->model().has_drift);
+  // Inner info columns keep their indices; SafeEnv appends its own.
+  REQUIRE(safe->spec().info_names[kNavInfoRobotCollision] == "robot_collision");
+  REQUIRE(safe->spec().info_names.size() == static_cast<size_t>(kNavInfoCount) + 3);
+  REQUIRE(safe->profile_sections() == std::vector<std::string>{"box2d", "env"});
+  req.config = {{"constraints", {{"fetch_gamma", 2.0}}}};
+  REQUIRE_THROWS_WITH(make_env(req), Catch::Contains("fetch_gamma"));
+  req.config = {{"tiago", {{"radius", -1.0}}}};
+  REQUIRE_THROWS_WITH(make_env(req), Catch::Contains("radius"));
+}
+
+TEST_CASE("nav env: with ATACOM, snapshot/restore and thread counts give identical runs", "[nav_env]") {
+  auto run = [](int threads, int steps, const std::string* restore_from, std::string* save_at_half) {
+    ThreadGuard guard(threads);
+    EnvRequest req;
+    req.name = "nav";
+    req.num_envs = 40;
+    req.atacom = true;
+    auto env = make_env(req);
+    env->seed(5);
+    std::vector<double> a;
+    int s0 = 0;
+    if (restore_from) {
+      std::stringstream in(*restore_from);
+      env->load_state(in);
+      s0 = steps / 2;
+    }
+    for (int s = s0; s < steps; ++s) {
+      if (save_at_half && s == steps / 2) {
+        std::stringstream out;
+        env->save_state(out);
+        *save_at_half = out.str();
+      }
+      random_actions(40, s, a);
+      env->step(a.data());
+    }
+    const auto& inner = dynamic_cast<const NavEnv&>(dynamic_cast<SafeEnv&>(*env).inner());
+    return batch_hash(inner);
+  };
+  std::string snap;
+  const uint64_t h1 = run(1, 600, nullptr, &snap);
+  REQUIRE(run(2, 600, nullptr, nullptr) == h1);
+  REQUIRE(run(2, 600, &snap, nullptr) == h1);
 }
