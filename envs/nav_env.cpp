@@ -209,6 +209,16 @@ void NavEnv::build_world(int i) {
   w->fetch = world.CreateBody(&disc_def);
   w->fetch->CreateFixture(&disc_fix);
 
+  // Box2D's block allocator takes a 16 KB chunk for contacts the first time
+  // a world creates one. Overlap TIAGo with a wall and with Fetch once and
+  // let a zero-length step (no integration) create the contacts, so no later
+  // step allocates; the episode start moves the bodies apart and the next
+  // step returns the contacts to the free list.
+  const float rt = static_cast<float>(cfg_.tiago.radius), rf = static_cast<float>(cfg_.fetch.radius);
+  w->tiago->SetTransform(b2Vec2(rx - 0.5f * rt, 0.0f), 0.0f);
+  w->fetch->SetTransform(b2Vec2(rx - 1.5f * rt - 0.5f * rf, 0.0f), 0.0f);
+  world.Step(0.0f, 1, 1);
+
   worlds_[i] = std::move(w);
 }
 

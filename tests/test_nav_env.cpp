@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <malloc.h>
 #include <sstream>
 #include <vector>
 
@@ -690,4 +691,33 @@ TEST_CASE("nav env: with ATACOM, snapshot/restore and thread counts give identic
   const uint64_t h1 = run(1, 600, nullptr, &snap);
   REQUIRE(run(2, 600, nullptr, nullptr) == h1);
   REQUIRE(run(2, 600, &snap, nullptr) == h1);
+}
+
+TEST_CASE("nav env: steady-state steps do not grow the heap", "[nav_env]") {
+  // Box2D allocates lazily (a 16 KB chunk the first time a world makes a
+  // contact) and never frees: any allocation inside step would show as net
+  // growth of the heap. One thread, so everything lands in malloc's main
+  // arena, which mallinfo2 reports.
+  ThreadGuard guard(1);
+  for (bool atacom : {false, true}) {
+    EnvRequest req;
+    req.name = "nav";
+    req.num_envs = 256;
+    req.atacom = atacom;
+    auto env = make_env(req);
+    env->seed(2);
+    std::vector<double> a;
+    random_actions(256, 0, a);
+    env->step(a.data());
+    const struct mallinfo2 before = mallinfo2();
+    int dones = 0;
+    for (int s = 1; s < 800; ++s) {
+      random_actions(256, s, a);
+      env->step(a.data());
+      for (int i = 0; i < 256; ++i) dones += env->buffers().done(i);
+    }
+    const struct mallinfo2 after = mallinfo2();
+    REQUIRE(dones > 256);  // collisions and resets happened in between
+    REQUIRE(after.uordblks + after.hblkhd == before.uordblks + before.hblkhd);
+  }
 }
