@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "atacom/arm_env.hpp"
+#include "atacom/nav_env.hpp"
 
 namespace atacom {
 
@@ -11,6 +12,8 @@ const std::vector<EnvEntry>& env_entries() {
   static const std::vector<EnvEntry> entries = {
       {"table", "TableEnv: TIAGo++ arm reaching above a table (34 constraints)", true, table_env_default_config, make_table_env},
       {"shelf", "ShelfEnvSim: TIAGo++ arm reaching into a shelf (34 constraints)", true, shelf_env_default_config, make_shelf_env},
+      {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
+       &nav_default_config_json, &make_nav_env},
   };
   return entries;
 }

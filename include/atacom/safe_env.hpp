@@ -37,7 +37,6 @@ class SafeEnv final : public BatchEnv {
   void step(const double* alpha) override;
   void save_state(std::ostream& out) const override { inner_->save_state(out); }
   void load_state(std::istream& in) override;
-
   // Profiling: the inner env's sections plus "projector" (constraint_model +
   // projection), all in thread-seconds.
   std::vector<std::string> profile_sections() const override;
