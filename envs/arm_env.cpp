@@ -106,13 +106,18 @@ ArmEnvConfig default_arm_env_config(ArmTask task) {
   // tolerances (measured maxima in docs/envs_arm.md).
   c.obstacle = make_group(kArmPoi, 0.02, 30.0, 1e-6, 0.01);
   c.body = make_group(kArmPoi, 0.02, 30.0, 1e-6, 0.01);
-  const double distal_margin[3] = {0.03, 0.05, 0.05}, distal_tol[3] = {0.02, 0.04, 0.04};
+  const double distal_margin[3] = {0.03, 0.06, 0.06}, distal_tol[3] = {0.02, 0.05, 0.05};
   for (int i = 0; i < 3; ++i) {  // gripper_palm, gripper_fingers, fingertips
     c.obstacle.margin[6 + i] = c.body.margin[6 + i] = distal_margin[i];
     c.obstacle.tolerance[6 + i] = c.body.tolerance[6 + i] = distal_tol[i];
   }
   // Ground rows hold absolute heights (m) of the elbow and the grasping frame.
+  // Within tolerance they keep the elbow PoI above 0.50 m and the grasping
+  // frame above 0.28 m; every other PoI is within a fixed distance of one of
+  // them (wrist_2 0.345 m from the elbow, palm 0.16 m from the grasping
+  // frame, ...), which keeps all link capsules off the floor (docs/envs_arm.md).
   c.ground = make_group(2, 0.30, 30.0, 1e-6, 0.02);
+  c.ground.margin[0] = 0.52;
   // Fallback start, used only if sample_batches x 8 random starts all fail:
   // the most interior of 200k random configurations (every row <= -0.11 in
   // both scenes; checked safe at construction).

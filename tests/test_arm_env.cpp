@@ -109,13 +109,13 @@ TEST_CASE("arm constraint rows match finite differences, row by row", "[arm_env]
 
 TEST_CASE("batched step equals the per-env scalar reference", "[arm_env]") {
   for (ArmTask task : kTasks) {
-    const int N = 37;
+    const int N = 61;
     ArmEnv env(default_arm_env_config(task), N);
     env.seed(3);
     Rng rng(4, 0);
     ProjectorBatch pb(env.projector_model(), N);
     int checked = 0, collisions = 0;
-    for (int s = 0; s < 60; ++s) {
+    for (int s = 0; s < 100; ++s) {
       const auto a = random_actions(rng, N);
       std::vector<double> q_before = env.q();
       env.step(a.data());
