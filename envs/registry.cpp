@@ -2,11 +2,14 @@
 
 #include <stdexcept>
 
+#include "atacom/pendulum.hpp"
+
 namespace atacom {
 
 // Each env adds one line here (a function declared next to its class).
 const std::vector<EnvEntry>& env_entries() {
   static const std::vector<EnvEntry> entries = {
+      pendulum_env_entry(),
   };
   return entries;
 }
