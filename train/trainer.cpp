@@ -286,6 +286,7 @@ class Run {
   double eval_s_ = 0;               // wall time spent evaluating (excluded from steps/s)
   int64_t steps_at_start_ = 0;
   double last_eval_return_ = kNaN;
+  int64_t last_ckpt_steps_ = -1;    // env_steps of the newest checkpoint written by this process
   std::vector<double> hist_steps_, hist_mean_, hist_std_;
   // evaluation scratch
   std::vector<float> eobs_;
@@ -524,6 +525,7 @@ void Run::save_checkpoint() {
                  {"payload_sections", {"counters", "sac", "replay", "streams", "env"}}};
   write_checkpoint_atomic(path("checkpoint.bin"), ck);
   write_file_atomic(path("checkpoint.json"), ck.manifest.dump(2) + "\n");
+  last_ckpt_steps_ = c.env_steps;
 }
 
 void Run::load_checkpoint() {
@@ -641,12 +643,12 @@ TrainSummary Run::go() {
     } else {
       print_progress(false, nullptr);
     }
-    if (t.checkpoint_every > 0 && (counters_.env_steps >= counters_.next_ckpt || end || stop)) {
+    if (t.checkpoint_every > 0 && (counters_.env_steps >= counters_.next_ckpt || end)) {
       while (counters_.next_ckpt <= counters_.env_steps) counters_.next_ckpt += t.checkpoint_every;
       save_checkpoint();
     }
     if (stop && !end) {
-      if (t.checkpoint_every == 0 && !have_eval) save_checkpoint();
+      if (last_ckpt_steps_ != counters_.env_steps) save_checkpoint();
       break;
     }
   }
