@@ -155,8 +155,11 @@ TEST_CASE("sac: snapshot round trip restores the agent bitwise", "[sac]") {
 // evaluation at 20k steps, which is stricter than the best one.
 TEST_CASE("sac learns Pendulum: eval return >= -200 within 20k steps for 4 of 5 seeds", "[learning]") {
   const auto t0 = std::chrono::steady_clock::now();
-  const std::string cfg_path = std::string(ATACOM_DEFAULT_DATA_DIR) + "/../configs/pendulum_sac.json";
+  // the shipped config, found from this source file (tests/ is next to configs/)
+  const std::string cfg_path =
+      (std::filesystem::path(__FILE__).parent_path().parent_path() / "configs" / "pendulum_sac.json").string();
   std::ifstream f(cfg_path);
+  INFO("config file " << cfg_path);
   REQUIRE(f.good());
   const nlohmann::json file = nlohmann::json::parse(f);
   int solved = 0;

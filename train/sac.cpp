@@ -166,7 +166,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     const auto loss = t.mean(t.sub(t.affine(pi.logp, alpha, 0.0f), qmin));
     actor_.zero_grad();
     t.backward(loss);
-    clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
+    if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
     actor_opt_.step(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
     double mean_logp = 0;
     const float* lp = t.value(pi.logp).data;
@@ -203,7 +203,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
   const auto loss = t.sum(t.mean(t.square(err), 0));
   critic_.zero_grad();
   t.backward(loss);
-  clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
+  if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
   critic_opt_.step(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic);
   st.critic_loss = 0.5 * t.scalar(loss);  // mean over the two critics
   double qm = 0;
