@@ -54,7 +54,7 @@ TEST_CASE("mlp: parameter gradients match finite differences", "[mlp]") {
     };
     net.zero_grad();
     loss(true);
-    const std::vector<double> g = net.grads();
+    const auto g = net.grads();
     for (size_t k = 0; k < net.params().size(); k += 3) {
       const double p0 = net.params()[k];
       net.params()[k] = p0 + 1e-6;

@@ -56,7 +56,14 @@ void check(bool ok, const char* op, const std::string& what) {
   if (!ok) throw std::invalid_argument(std::string("autodiff ") + op + ": " + what);
 }
 
-std::string shape(int r, int c) { return "(" + std::to_string(r) + " x " + std::to_string(c) + ")"; }
+std::string shape(int r, int c) {
+  std::string s(1, '(');  // built piecewise: GCC 12 warns falsely (-Wrestrict) on "(" + std::string
+  s += std::to_string(r);
+  s += " x ";
+  s += std::to_string(c);
+  s += ')';
+  return s;
+}
 
 }  // namespace
 
@@ -100,12 +107,7 @@ typename Tape<T>::Node Tape<T>::make(Op op, int rows, int cols, bool needs_grad)
 
 template <class T>
 typename Tape<T>::Id Tape<T>::constant(const T* data, int rows, int cols) {
-  Node n;
-  n.op = Op::Leaf;
-  n.rows = rows;
-  n.cols = cols;
-  n.v = const_cast<T*>(data);  // never written: constants have no grad
-  return push(n);
+  return leaf(const_cast<T*>(data), nullptr, rows, cols);  // never written: no grad
 }
 
 template <class T>
@@ -114,9 +116,21 @@ typename Tape<T>::Id Tape<T>::leaf(T* value, T* grad, int rows, int cols) {
   n.op = Op::Leaf;
   n.rows = rows;
   n.cols = cols;
-  n.v = value;
-  n.g = grad;
   n.needs_grad = grad != nullptr;
+  const size_t sz = size_t(rows) * size_t(cols);
+  if (is_aligned64(value)) {
+    n.v = value;
+  } else {
+    n.v = arena_.alloc(sz);
+    std::memcpy(n.v, value, sz * sizeof(T));
+  }
+  if (grad && is_aligned64(grad)) {
+    n.g = grad;
+  } else if (grad) {
+    n.g = arena_.alloc(sz);
+    std::memset(n.g, 0, sz * sizeof(T));
+    n.ext_g = grad;
+  }
   return push(n);
 }
 
@@ -552,6 +566,11 @@ void Tape<T>::backward(Id loss) {
       case Op::TanhGaussLogp: back_tanh_gauss_logp<T>(y, node(y.a), node(y.b), node(y.c)); break;
       default: back_unary(y); break;
     }
+  }
+  for (Id id = 0; id <= loss; ++id) {  // hand staged leaf gradients to their owners
+    const Node& n = nodes_[size_t(id)];
+    if (n.ext_g)
+      for (int64_t k = 0; k < int64_t(n.rows) * n.cols; ++k) n.ext_g[k] += n.g[k];
   }
 }
 

@@ -11,6 +11,8 @@
 #include "atacom/config_json.hpp"
 #include "atacom/parallel.hpp"
 
+#include <tbb/parallel_invoke.h>
+
 namespace atacom {
 
 SacConfig default_sac_config() {
@@ -152,68 +154,82 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
   if (batch.B != B) throw std::invalid_argument("Sac::update: batch has " + std::to_string(batch.B) +
                                                 " rows, config batch_size is " + std::to_string(B));
   SacStats st;
-  Tape<float>& t = tape_;
-
-  // 1. actor and temperature, against the current critics.
-  if (update_actor) {
+  // All noise is drawn up front, in a fixed order, so the two phases below
+  // can run in any order or concurrently.
+  if (update_actor)
     for (auto& z : noise_pi_) z = float(rng_.normal());
+  for (auto& z : noise_next_) z = float(rng_.normal());
+  const float alpha = float(std::exp(log_alpha_));
+  double mean_logp = 0;
+
+  // Actor phase: gradient of L_pi at the current actor, critics and alpha.
+  // Reads critic parameters, writes only actor gradients.
+  auto actor_phase = [&]() {
+    Tape<float>& t = actor_tape_;
     t.clear();
     const auto obs = t.constant(batch.obs.data(), B, D);
     const PolicyOut pi = policy(t, obs, noise_pi_.data(), true);
     const auto q = critic_.forward(t, t.concat(obs, pi.action), false);
     const auto qmin = t.minimum(t.slice(q, 0, 1), t.slice(q, 1, 2));
-    const float alpha = float(std::exp(log_alpha_));
     const auto loss = t.mean(t.sub(t.affine(pi.logp, alpha, 0.0f), qmin));
     actor_.zero_grad();
     t.backward(loss);
-    if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
-    actor_opt_.step(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
-    double mean_logp = 0;
     const float* lp = t.value(pi.logp).data;
     for (int i = 0; i < B; ++i) mean_logp += lp[i];
     mean_logp /= B;
+    st.actor_loss = t.scalar(loss);
+  };
+
+  // Critic phase: gradient of L_Q at the current critics, targets, actor and
+  // alpha. Reads actor parameters, writes only critic gradients.
+  auto critic_phase = [&]() {
+    Tape<float>& t = tape_;
+    t.clear();
+    const auto next = t.constant(batch.next_obs.data(), B, D);
+    const PolicyOut pn = policy(t, next, noise_next_.data(), false);
+    const auto qt = critic_target_.forward(t, t.concat(next, pn.action), false);
+    const float* qtv = t.value(qt).data;
+    const float* lpn = t.value(pn.logp).data;
+    const float gamma = float(cfg_.gamma);
+    for (int i = 0; i < B; ++i) {
+      const float v = std::min(qtv[2 * i], qtv[2 * i + 1]) - alpha * lpn[i];
+      // Termination cuts the bootstrap; truncation does not.
+      y_[size_t(i)] = batch.reward[size_t(i)] + gamma * (1.0f - batch.terminated[size_t(i)]) * v;
+    }
+    const auto obs = t.constant(batch.obs.data(), B, D);
+    const auto q = critic_.forward(t, t.concat(obs, t.constant(batch.action.data(), B, A)), true);
+    const auto err = t.sub(q, t.constant(y_.data(), B, 1));
+    const auto loss = t.sum(t.mean(t.square(err), 0));
+    critic_.zero_grad();
+    t.backward(loss);
+    st.critic_loss = 0.5 * t.scalar(loss);  // mean over the two critics
+    double qm = 0;
+    const float* qv = t.value(q).data;
+    for (int i = 0; i < 2 * B; ++i) qm += qv[i];
+    st.q_mean = qm / (2 * B);
+  };
+
+  // The phases share no written state, so running them concurrently gives
+  // the same bits as running them one after the other.
+  if (update_actor) tbb::parallel_invoke(actor_phase, critic_phase);
+  else critic_phase();
+
+  if (!std::isfinite(st.critic_loss))
+    throw std::runtime_error("SAC critic update produced a non-finite loss (lower lr_critic or check the rewards)");
+  if (update_actor) {
+    if (!std::isfinite(st.actor_loss) || !std::isfinite(mean_logp))
+      throw std::runtime_error("SAC actor update produced a non-finite loss "
+                               "(lower lr_actor/lr_alpha or check the rewards)");
+    if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
+    actor_opt_.step(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
     const double g_alpha = -(mean_logp + target_entropy_);
     st.alpha_loss = -log_alpha_ * (mean_logp + target_entropy_);
     alpha_opt_.step(&log_alpha_, &g_alpha, cfg_.lr_alpha);
-    st.actor_loss = t.scalar(loss);
     st.entropy = -mean_logp;
     st.actor_updated = true;
-    if (!std::isfinite(st.actor_loss) || !std::isfinite(log_alpha_))
-      throw std::runtime_error("SAC actor update produced a non-finite loss or temperature "
-                               "(lower lr_actor/lr_alpha or check the rewards)");
   }
-
-  // 2. critics, against the target critics and the (updated) actor.
-  for (auto& z : noise_next_) z = float(rng_.normal());
-  t.clear();
-  const auto next = t.constant(batch.next_obs.data(), B, D);
-  const PolicyOut pn = policy(t, next, noise_next_.data(), false);
-  const auto qt = critic_target_.forward(t, t.concat(next, pn.action), false);
-  const float* qtv = t.value(qt).data;
-  const float* lpn = t.value(pn.logp).data;
-  const float alpha = float(std::exp(log_alpha_)), gamma = float(cfg_.gamma);
-  for (int i = 0; i < B; ++i) {
-    const float v = std::min(qtv[2 * i], qtv[2 * i + 1]) - alpha * lpn[i];
-    // Termination cuts the bootstrap; truncation does not.
-    y_[size_t(i)] = batch.reward[size_t(i)] + gamma * (1.0f - batch.terminated[size_t(i)]) * v;
-  }
-  const auto obs = t.constant(batch.obs.data(), B, D);
-  const auto q = critic_.forward(t, t.concat(obs, t.constant(batch.action.data(), B, A)), true);
-  const auto err = t.sub(q, t.constant(y_.data(), B, 1));
-  const auto loss = t.sum(t.mean(t.square(err), 0));
-  critic_.zero_grad();
-  t.backward(loss);
   if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
   critic_opt_.step(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic);
-  st.critic_loss = 0.5 * t.scalar(loss);  // mean over the two critics
-  double qm = 0;
-  const float* qv = t.value(q).data;
-  for (int i = 0; i < 2 * B; ++i) qm += qv[i];
-  st.q_mean = qm / (2 * B);
-  if (!std::isfinite(st.critic_loss))
-    throw std::runtime_error("SAC critic update produced a non-finite loss (lower lr_critic or check the rewards)");
-
-  // 3. target critics.
   polyak_update(critic_target_.params().data(), critic_.params().data(), critic_.params().size(), cfg_.tau);
   return st;
 }

@@ -44,6 +44,7 @@ class Tape {
     Id a = -1, b = -1, c = -1;  // inputs
     int i0 = 0, i1 = 0;         // integer attributes (groups, axis, slice bounds)
     T s0 = 0, s1 = 0;           // scalar attributes (affine, clamp bounds, eps)
+    T* ext_g = nullptr;         // leaf staged in the arena: its caller's grad buffer
   };
 
   explicit Tape(size_t arena_chunk_elems = size_t{1} << 20);
@@ -52,6 +53,9 @@ class Tape {
   void clear();
 
   // Data that gets no gradient. The memory must outlive the graph.
+  // Memory that is not 64-byte aligned is copied into the arena first (and a
+  // leaf's gradient staged there and added to `grad` by backward()), so the
+  // result never depends on where the caller's buffer sits.
   Id constant(const T* data, int rows, int cols);
   // External leaf; when grad != null, backward() adds dL/dvalue into grad.
   Id leaf(T* value, T* grad, int rows, int cols);

@@ -33,8 +33,8 @@ T read_pod(std::istream& in, const char* what) {
   return v;
 }
 
-template <class T>
-void write_vec(std::ostream& out, const std::vector<T>& v) {
+template <class T, class Alloc>
+void write_vec(std::ostream& out, const std::vector<T, Alloc>& v) {
   static_assert(std::is_trivially_copyable_v<T>);
   write_pod<uint64_t>(out, v.size());
   if (!v.empty()) out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
@@ -42,8 +42,8 @@ void write_vec(std::ostream& out, const std::vector<T>& v) {
 
 // Reads a vector written by write_vec. expected_size >= 0 enforces the count
 // (a snapshot of another shape is rejected rather than silently resized).
-template <class T>
-void read_vec(std::istream& in, std::vector<T>& v, const char* what, int64_t expected_size = -1) {
+template <class T, class Alloc>
+void read_vec(std::istream& in, std::vector<T, Alloc>& v, const char* what, int64_t expected_size = -1) {
   static_assert(std::is_trivially_copyable_v<T>);
   const uint64_t n = read_pod<uint64_t>(in, what);
   if (expected_size >= 0 && n != static_cast<uint64_t>(expected_size))

@@ -48,10 +48,10 @@ class Mlp {
   // (gradients still flow to x).
   typename Tape<T>::Id forward(Tape<T>& tape, typename Tape<T>::Id x, bool param_grads);
 
-  std::vector<T>& params() { return params_; }
-  const std::vector<T>& params() const { return params_; }
-  std::vector<T>& grads() { return grads_; }
-  const std::vector<T>& grads() const { return grads_; }
+  AlignedVector<T>& params() { return params_; }
+  const AlignedVector<T>& params() const { return params_; }
+  AlignedVector<T>& grads() { return grads_; }
+  const AlignedVector<T>& grads() const { return grads_; }
   void zero_grad();
 
   int in() const { return in_; }
@@ -66,8 +66,8 @@ class Mlp {
   int in_ = 0, out_ = 0, ensemble_ = 1;
   Activation act_ = Activation::Relu;
   std::vector<Layer> layers_;
-  std::vector<T> params_;  // (num_params) all members, all layers
-  std::vector<T> grads_;   // (num_params) accumulated by Tape::backward
+  AlignedVector<T> params_;  // (num_params) all members, all layers
+  AlignedVector<T> grads_;   // (num_params) accumulated by Tape::backward
 };
 
 extern template class Mlp<float>;

@@ -10,18 +10,19 @@
 #include <vector>
 
 #include "atacom/rng.hpp"
+#include "atacom/tensor.hpp"
 
 namespace atacom {
 
 struct ReplayBatch {
   int B = 0;
-  std::vector<float> obs;         // (B x obs_dim)
-  std::vector<float> action;      // (B x act_dim)
-  std::vector<float> reward;      // (B)
-  std::vector<float> cost;        // (B)
-  std::vector<float> next_obs;    // (B x obs_dim)
-  std::vector<float> terminated;  // (B) 1: no bootstrap
-  std::vector<float> truncated;   // (B) 1: episode cut by the horizon (bootstrap)
+  AlignedVector<float> obs;        // (B x obs_dim)
+  AlignedVector<float> action;     // (B x act_dim)
+  AlignedVector<float> reward;     // (B)
+  AlignedVector<float> cost;       // (B)
+  AlignedVector<float> next_obs;   // (B x obs_dim)
+  AlignedVector<float> terminated; // (B) 1: no bootstrap
+  AlignedVector<float> truncated;  // (B) 1: episode cut by the horizon (bootstrap)
   void resize(int B, int obs_dim, int act_dim);
 };
 

@@ -96,8 +96,8 @@ class Sac {
   void load(std::istream& in);  // throws on shape mismatch or truncation
 
   // Memory requests of the update and act tapes (constant after warm-up).
-  size_t allocations() const { return tape_.allocations() + act_tape_.allocations(); }
-  double gemm_flops() const { return tape_.gemm_flops() + act_tape_.gemm_flops(); }
+  size_t allocations() const { return tape_.allocations() + actor_tape_.allocations() + act_tape_.allocations(); }
+  double gemm_flops() const { return tape_.gemm_flops() + actor_tape_.gemm_flops() + act_tape_.gemm_flops(); }
 
  private:
   // Policy head on the tape: returns (action, log_prob) ids for obs id.
@@ -112,7 +112,7 @@ class Sac {
   Adam<double> alpha_opt_;
   double log_alpha_ = 0.0;
   Rng rng_;  // update noise
-  Tape<float> tape_, act_tape_;
+  Tape<float> tape_, actor_tape_, act_tape_;  // critic phase, actor phase, act()
   std::vector<float> noise_pi_;    // (B x act_dim) reparameterisation noise for the actor loss
   std::vector<float> noise_next_;  // (B x act_dim) noise for a' ~ pi(s')
   std::vector<float> y_;           // (B) critic targets
