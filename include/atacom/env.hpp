@@ -77,6 +77,12 @@ class BatchEnv {
   virtual void save_state(std::ostream& out) const = 0;
   virtual void load_state(std::istream& in) = 0;
 
+  // Optional time split of step() into named sections (benchmarks only).
+  // Envs that support it accumulate wall seconds per section while enabled.
+  virtual std::vector<std::string> profile_sections() const { return {}; }
+  virtual void set_profiling(bool /*on*/) {}
+  virtual std::vector<double> profile_seconds() const { return {}; }  // (sections), since last enable
+
  protected:
   EnvBuffers buffers_;
 };

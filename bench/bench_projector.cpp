@@ -1,0 +1,93 @@
+// Throughput of the batched ATACOM projector: projections per second.
+//
+// One JSON line per configuration: N in {1, 64, 1024, 16384}, k in {5, 34,
+// 100}, m in {2, 7}, threads in {1, 2}. Systems are generic: dense G
+// (n = m = 7, or n = 3 for m = 2, the differential drive), drift f on, no
+// uncontrollable state. Extra lines measure the arm's diagonal G and the
+// machine's float64 FMA peak, so "gflops" can be read as a share of peak.
+//
+// Usage: bench_projector [--quick]
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "atacom/parallel.hpp"
+#include "atacom/projector.hpp"
+#include "atacom/rng.hpp"
+#include "bench_common.hpp"
+
+
+using namespace atacom;
+
+namespace {
+
+// Floating-point operations per projection, counted from the kernel's loops
+// (multiply-adds count 2): J_G = J_q G, F = J_q f, the QR of [I; A^-1 J_G]
+// with its right-hand side, three triangular solves, the slack controls,
+// plus about 20 flops per row for the slack rate (exp polynomial) and scaling.
+double flops_per_projection(int n, int m, int k, bool dense_g, bool drift) {
+  const double fma = (dense_g ? double(k) * n * m : double(k) * m) + (drift ? double(k) * n : 0.0) +
+                     double(k) * m * (m + 2) /* QR */ + double(k) * m /* u_s */ + 1.5 * m * m /* solves */;
+  const double other = double(k) * m /* row scaling */ + 24.0 * k + 6.0 * m;
+  return 2.0 * fma + other;
+}
+
+void fill(const ProjectorModel& mod, ProjectorBatch& B, uint64_t seed) {
+  Rng rng(seed, 0);
+  for (auto& v : B.f) v = rng.normal();
+  for (auto& v : B.G) v = mod.g_form == GForm::Diagonal ? rng.uniform(0.5, 2.0) : rng.normal();
+  for (auto& v : B.c) v = rng.uniform(-1.0, 0.05);  // a mix of inactive, active and violated rows
+  for (auto& v : B.Jq) v = rng.normal();
+  for (auto& v : B.alpha) v = rng.uniform(-1.0, 1.0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  const std::string cpu = bench::cpu_name();
+  set_num_threads(1);
+  const double peak1 = bench::measure_f64_peak_gflops_one_core();
+  bench::emit({{"bench", "f64_fma_peak"}, {"threads", 1}, {"gflops", peak1}, {"cpu", cpu}});
+
+  const int Ns[] = {1, 64, 1024, 16384};
+  const int ks[] = {5, 34, 100};
+  const int ms[] = {2, 7};
+  const int threads_list[] = {1, 2};
+  for (int m : ms) {
+    for (int k : ks) {
+      for (int N : Ns) {
+        if (quick && N != 16384) continue;
+        const int n = m == 2 ? 3 : m;
+        ProjectorModel mod = default_projector_model(n, m, k, 0);
+        ProjectorBatch B(mod, N);
+        fill(mod, B, 1);
+        for (int threads : threads_list) {
+          set_num_threads(threads);
+          const double t = bench::best_seconds_per_call([&] { project_batch(mod, B); }, quick ? 3 : 5, 0.1);
+          const double per_s = N / t;
+          const double flops = flops_per_projection(n, m, k, true, true);
+          bench::emit({{"bench", "projector"}, {"N", N}, {"k", k}, {"m", m}, {"n", n}, {"G", "dense"},
+                       {"threads", threads}, {"per_s", per_s}, {"flops", flops},
+                       {"gflops", per_s * flops * 1e-9}, {"peak_share", per_s * flops * 1e-9 / (peak1 * threads)}});
+        }
+      }
+    }
+  }
+  // The arm's case: diagonal G = diag(vmax), no drift.
+  for (int threads : threads_list) {
+    ProjectorModel mod = default_projector_model(7, 7, 34, 0);
+    mod.g_form = GForm::Diagonal;
+    mod.has_drift = false;
+    ProjectorBatch B(mod, 16384);
+    fill(mod, B, 2);
+    set_num_threads(threads);
+    const double t = bench::best_seconds_per_call([&] { project_batch(mod, B); }, 5, 0.1);
+    const double per_s = 16384 / t;
+    const double flops = flops_per_projection(7, 7, 34, false, false);
+    bench::emit({{"bench", "projector"}, {"N", 16384}, {"k", 34}, {"m", 7}, {"n", 7}, {"G", "diagonal"},
+                 {"threads", threads}, {"per_s", per_s}, {"flops", flops}, {"gflops", per_s * flops * 1e-9},
+                 {"peak_share", per_s * flops * 1e-9 / (peak1 * threads)}});
+  }
+  return 0;
+}

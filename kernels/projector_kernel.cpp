@@ -1,0 +1,634 @@
+// Batched ATACOM projector.
+//
+// Fast path (inequality rows, projected basis): blocks of kLanes envs are
+// transposed into lane-major scratch (element-major, env-minor) so that every
+// arithmetic loop runs over the lanes and vectorises without intrinsics. The
+// (k x k) system of the paper is never formed; with J_G = J_q G and
+// W = A^-2 the push-through identity gives
+//   N_a = (I + J_G^T W J_G)^-1,   b = -N_a J_G^T W r,   r = F + K_c cbar,
+// and the slack controls follow from the constraint rows themselves:
+//   u_s = -A^-1 (r + J_G a)   (so J_u [a; u_s] = -r holds for any lambda).
+// I + J_G^T W J_G = R^T R comes from a Householder QR of [I_m; A^-1 J_G]
+// rather than from forming the product, which would square the condition
+// number (W reaches 1/tol^2 on active rows). Cost per env, in multiply-adds:
+//   k n m (J_G, dense G) + k m (m + 1) (QR and rhs) + 2 k m (u_s) + O(m^2).
+//
+// General path (equality rows or smooth basis): the same m x m algebra per env
+// with Eigen, plus the k_e x k_e Schur complement of the equality rows and,
+// for the smooth basis, N_a^{1/2} (the action block of the Procrustes basis).
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
+#include <Eigen/Dense>
+
+#include "atacom/parallel.hpp"
+#include "atacom/projector.hpp"
+
+namespace atacom {
+
+namespace {
+
+constexpr int kLanes = 8;        // one AVX-512 register of doubles
+constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count independent)
+
+// One lane vector: 8 envs' values of one element. GCC lowers arithmetic on
+// it to one AVX-512 instruction (or two AVX2 ones); writing the kernel in
+// this type, rather than in loops the vectoriser may reorder, pins the
+// vectorisation to the env dimension.
+typedef double V __attribute__((vector_size(kLanes * sizeof(double))));
+typedef long long VI __attribute__((vector_size(kLanes * sizeof(double))));
+
+inline V splat(double x) { return V{} + x; }
+inline V vmin(V a, V b) { return a < b ? a : b; }
+inline V vmax(V a, V b) { return a > b ? a : b; }
+inline VI vfinite(V x) { return (x - x) == 0.0; }  // false for NaN and +-Inf
+inline V vsqrt(V x) {
+  V r;  // GCC turns this into one vsqrtpd (sqrt cannot set errno here: -fno-math-errno)
+  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
+  return r;
+}
+
+// exp(x) with a degree-13 Taylor polynomial after range reduction to
+// |r| <= ln2/2: relative error below 2e-16 (std::exp stays a scalar libm
+// call). Arguments are clamped to [-708, 709]; callers cap the result anyway.
+inline V vexp(V x) {
+  x = vmin(vmax(x, splat(-708.0)), splat(709.0));
+  const double kLog2e = 1.4426950408889634;
+  const double kLn2Hi = 6.93147180369123816490e-01;
+  const double kLn2Lo = 1.90821492927058770002e-10;
+  const double kShift = 6755399441055744.0;  // 1.5 * 2^52: round to nearest
+  const V t = x * kLog2e + kShift;
+  const V nf = t - kShift;
+  const V r = (x - nf * kLn2Hi) - nf * kLn2Lo;
+  V p = splat(1.0 / 6227020800.0);
+  p = p * r + 1.0 / 479001600.0;
+  p = p * r + 1.0 / 39916800.0;
+  p = p * r + 1.0 / 3628800.0;
+  p = p * r + 1.0 / 362880.0;
+  p = p * r + 1.0 / 40320.0;
+  p = p * r + 1.0 / 5040.0;
+  p = p * r + 1.0 / 720.0;
+  p = p * r + 1.0 / 120.0;
+  p = p * r + 1.0 / 24.0;
+  p = p * r + 1.0 / 6.0;
+  p = p * r + 0.5;
+  p = p * r + 1.0;
+  p = p * r + 1.0;
+  // 2^n through the exponent bits; n in [-1021, 1023] after the clamp.
+  const VI n = (VI)t - (VI)splat(kShift);
+  const V scale = (V)((n + 1023) << 52);
+  return p * scale;
+}
+
+inline bool finite(double x) { return std::isfinite(x); }
+
+// Lane-major scratch for one block; sized once per thread and model shape.
+// Every array is (elements) lane vectors: element-major, env-minor.
+struct LaneScratch {
+  std::unique_ptr<V[]> buf;
+  int n = -1, m = -1, k = -1, p = -1;
+  V* JqT;   // (k x n)  J_q
+  V* JxT;   // (k x p)  J_x
+  V* GT;    // (n x m)  G (dense) or (n) diagonal
+  V* fT;    // (n)      f
+  V* xdT;   // (p)      xdot
+  V* JG;    // (k x m)  J_G = J_q G, row-major
+  V* Bw;    // (k x m)  A^-1 J_G; overwritten by the QR
+  V* inv;   // (k)      1 / slack rate
+  V* c;     // (k)      constraint values
+  V* s;     // (k)      slack values
+  V* y;     // (k)      A^-1 r; overwritten by the QR, then the slack controls
+  V* y0;    // (k)      A^-1 r, kept for the slack controls
+  V* R;     // (m x m)  upper triangular factor, row-major
+  V* z;     // (m)      top of Q^T [0; y]
+  V* alpha; // (m)
+  V* b;     // (m)      -N_a J_G^T W r
+  V* t;     // (m)      N_a alpha
+  V* a;     // (m)      safe control
+
+  void setup(const ProjectorModel& mod) {
+    if (mod.n == n && mod.m == m && mod.k == k && mod.p == p) return;
+    n = mod.n; m = mod.m; k = mod.k; p = mod.p;
+    const size_t sizes[] = {size_t(k) * n, size_t(k) * p, size_t(n) * m, size_t(n), size_t(p),
+                            size_t(k) * m, size_t(k) * m, size_t(k), size_t(k), size_t(k), size_t(k),
+                            size_t(k), size_t(m) * m, size_t(m), size_t(m), size_t(m), size_t(m), size_t(m)};
+    V** fields[] = {&JqT, &JxT, &GT, &fT, &xdT, &JG, &Bw, &inv, &c, &s, &y, &y0, &R, &z, &alpha, &b, &t, &a};
+    static_assert(std::size(sizes) == std::size(fields));
+    size_t total = 0;
+    for (size_t sz : sizes) total += sz;
+    buf.reset(new V[total + 1]());  // aligned new: V is 64-byte aligned
+    V* ptr = buf.get();
+    for (size_t i = 0; i < std::size(fields); ++i) {
+      *fields[i] = ptr;
+      ptr += sizes[i];
+    }
+  }
+};
+
+// Copy `count` consecutive doubles of each lane's source into lane vectors
+// (dst[idx][l] = src[l][idx]). With AVX-512 whole 8 x 8 tiles are
+// transposed in registers (8 loads, 24 shuffles, 8 stores instead of 64
+// scalar moves each way); the scalar loop handles the rest.
+// GCC 12 flags its own _mm512_undefined_pd inside the unpack intrinsics.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+void gather_lanes(const double* const src[kLanes], int count, V* dst) {
+  int idx = 0;
+#if defined(__AVX512F__)
+  static_assert(kLanes == 8);
+  for (; idx + 8 <= count; idx += 8) {
+    __m512d r0 = _mm512_loadu_pd(src[0] + idx), r1 = _mm512_loadu_pd(src[1] + idx);
+    __m512d r2 = _mm512_loadu_pd(src[2] + idx), r3 = _mm512_loadu_pd(src[3] + idx);
+    __m512d r4 = _mm512_loadu_pd(src[4] + idx), r5 = _mm512_loadu_pd(src[5] + idx);
+    __m512d r6 = _mm512_loadu_pd(src[6] + idx), r7 = _mm512_loadu_pd(src[7] + idx);
+    // pairs, then 128-bit blocks, then 256-bit halves
+    __m512d t0 = _mm512_unpacklo_pd(r0, r1), t1 = _mm512_unpackhi_pd(r0, r1);
+    __m512d t2 = _mm512_unpacklo_pd(r2, r3), t3 = _mm512_unpackhi_pd(r2, r3);
+    __m512d t4 = _mm512_unpacklo_pd(r4, r5), t5 = _mm512_unpackhi_pd(r4, r5);
+    __m512d t6 = _mm512_unpacklo_pd(r6, r7), t7 = _mm512_unpackhi_pd(r6, r7);
+    __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
+    __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
+    __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
+    __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
+    dst[idx + 0] = _mm512_shuffle_f64x2(u0, u4, 0x88);
+    dst[idx + 1] = _mm512_shuffle_f64x2(u1, u5, 0x88);
+    dst[idx + 2] = _mm512_shuffle_f64x2(u2, u6, 0x88);
+    dst[idx + 3] = _mm512_shuffle_f64x2(u3, u7, 0x88);
+    dst[idx + 4] = _mm512_shuffle_f64x2(u0, u4, 0xDD);
+    dst[idx + 5] = _mm512_shuffle_f64x2(u1, u5, 0xDD);
+    dst[idx + 6] = _mm512_shuffle_f64x2(u2, u6, 0xDD);
+    dst[idx + 7] = _mm512_shuffle_f64x2(u3, u7, 0xDD);
+  }
+#endif
+  for (; idx < count; ++idx)
+    for (int l = 0; l < kLanes; ++l) dst[idx][l] = src[l][idx];
+}
+
+// Inverse of gather_lanes: dst[l][idx] = src[idx][l] for all 8 lanes (the
+// 8 x 8 transpose is its own inverse).
+void scatter_lanes(const V* src, int count, double* const dst[kLanes]) {
+  int idx = 0;
+#if defined(__AVX512F__)
+  for (; idx + 8 <= count; idx += 8) {
+    const __m512d r0 = src[idx + 0], r1 = src[idx + 1], r2 = src[idx + 2], r3 = src[idx + 3];
+    const __m512d r4 = src[idx + 4], r5 = src[idx + 5], r6 = src[idx + 6], r7 = src[idx + 7];
+    __m512d t0 = _mm512_unpacklo_pd(r0, r1), t1 = _mm512_unpackhi_pd(r0, r1);
+    __m512d t2 = _mm512_unpacklo_pd(r2, r3), t3 = _mm512_unpackhi_pd(r2, r3);
+    __m512d t4 = _mm512_unpacklo_pd(r4, r5), t5 = _mm512_unpackhi_pd(r4, r5);
+    __m512d t6 = _mm512_unpacklo_pd(r6, r7), t7 = _mm512_unpackhi_pd(r6, r7);
+    __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
+    __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
+    __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
+    __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
+    _mm512_storeu_pd(dst[0] + idx, _mm512_shuffle_f64x2(u0, u4, 0x88));
+    _mm512_storeu_pd(dst[1] + idx, _mm512_shuffle_f64x2(u1, u5, 0x88));
+    _mm512_storeu_pd(dst[2] + idx, _mm512_shuffle_f64x2(u2, u6, 0x88));
+    _mm512_storeu_pd(dst[3] + idx, _mm512_shuffle_f64x2(u3, u7, 0x88));
+    _mm512_storeu_pd(dst[4] + idx, _mm512_shuffle_f64x2(u0, u4, 0xDD));
+    _mm512_storeu_pd(dst[5] + idx, _mm512_shuffle_f64x2(u1, u5, 0xDD));
+    _mm512_storeu_pd(dst[6] + idx, _mm512_shuffle_f64x2(u2, u6, 0xDD));
+    _mm512_storeu_pd(dst[7] + idx, _mm512_shuffle_f64x2(u3, u7, 0xDD));
+  }
+#endif
+  for (; idx < count; ++idx)
+    for (int l = 0; l < kLanes; ++l) dst[l][idx] = src[idx][l];
+}
+#pragma GCC diagnostic pop
+
+// Fast path over envs [lo, hi), hi - lo <= kLanes. MC is m when it is a
+// compile-time constant (loops over m then unroll), 0 otherwise.
+template <int MC>
+void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi, LaneScratch& S, bool store_basis) {
+  constexpr int L = kLanes;
+  const int m = MC > 0 ? MC : mod.m;
+  constexpr int MA = MC > 0 ? MC : 16;  // accumulator capacity
+  const int n = mod.n, k = mod.k, p = mod.p;
+  const bool diagG = mod.g_form == GForm::Diagonal;
+  const bool need_JqT = !diagG || mod.has_drift;
+  const int gsz = diagG ? n : n * m;
+
+  // ---- gather: env-major inputs -> lane vectors. Idle lanes repeat the last env.
+  const double* src[L];
+  auto lane_env = [&](int l) { return size_t(std::min(lo + l, hi - 1)); };
+  if (need_JqT) {
+    for (int l = 0; l < L; ++l) src[l] = B.Jq.data() + lane_env(l) * k * n;
+    gather_lanes(src, k * n, S.JqT);
+  }
+  for (int l = 0; l < L; ++l) src[l] = B.G.data() + lane_env(l) * gsz;
+  gather_lanes(src, gsz, S.GT);
+  if (diagG) {
+    // J_G = J_q diag(g): the Jacobian itself is only needed scaled.
+    if (need_JqT) {
+      for (int i = 0; i < k; ++i)
+        for (int j = 0; j < m; ++j) S.JG[i * m + j] = S.JqT[i * n + j] * S.GT[j];
+    } else {
+      for (int l = 0; l < L; ++l) src[l] = B.Jq.data() + lane_env(l) * k * n;
+      gather_lanes(src, k * n, S.JG);
+      for (int i = 0; i < k; ++i)
+        for (int j = 0; j < m; ++j) S.JG[i * m + j] *= S.GT[j];
+    }
+  }
+  if (mod.has_drift) {
+    for (int l = 0; l < L; ++l) src[l] = B.f.data() + lane_env(l) * n;
+    gather_lanes(src, n, S.fT);
+  }
+  if (p > 0) {
+    for (int l = 0; l < L; ++l) src[l] = B.Jx.data() + lane_env(l) * k * p;
+    gather_lanes(src, k * p, S.JxT);
+    for (int l = 0; l < L; ++l) src[l] = B.xdot.data() + lane_env(l) * p;
+    gather_lanes(src, p, S.xdT);
+  }
+  for (int l = 0; l < L; ++l) src[l] = B.c.data() + lane_env(l) * k;
+  gather_lanes(src, k, S.c);
+  for (int l = 0; l < L; ++l) src[l] = B.alpha.data() + lane_env(l) * m;
+  gather_lanes(src, m, S.alpha);
+
+  // ---- alpha: NaN/Inf -> 0 (flagged), then clip to [-1, 1].
+  VI alpha_bad = VI{};
+  for (int j = 0; j < m; ++j) {
+    const VI fin = vfinite(S.alpha[j]);
+    alpha_bad |= ~fin;
+    S.alpha[j] = vmin(vmax(fin ? S.alpha[j] : V{}, splat(-1.0)), splat(1.0));
+  }
+
+  // ---- per row: slack, rate, J_G row (dense G), F, r = F + K_c cbar,
+  // B = A^-1 J_G and y = A^-1 r. Also the squared norm of [1; B(:, 0)].
+  const double Kc = mod.K_c;
+  V nrm = splat(1.0);
+  for (int i = 0; i < k; ++i) {
+    const double tol = mod.tol[i], beta = mod.beta[i];
+    const V c = S.c[i];
+    const V s = vmax(-c, splat(tol));
+    S.s[i] = s;
+    V rate;
+    switch (mod.slack[i]) {
+      case SlackType::SoftCorner: rate = vmin(vexp(beta * s), splat(1.0 / tol)) - 1.0; break;
+      case SlackType::Exponential: rate = beta * s; break;
+      default: rate = vsqrt(2.0 * s); break;  // Quadratic
+    }
+    const V inv = 1.0 / rate;
+    S.inv[i] = inv;
+    V* jg = S.JG + size_t(i) * m;
+    if (!diagG) {
+      V acc[MA];
+#pragma GCC unroll 16
+      for (int j = 0; j < m; ++j) acc[j] = V{};
+      for (int t = 0; t < n; ++t) {
+        const V jq = S.JqT[i * n + t];
+        const V* gt = S.GT + size_t(t) * m;
+#pragma GCC unroll 16
+        for (int j = 0; j < m; ++j) acc[j] += jq * gt[j];
+      }
+      for (int j = 0; j < m; ++j) jg[j] = acc[j];
+    }
+    V F = V{};
+    if (mod.has_drift)
+      for (int t = 0; t < n; ++t) F += S.JqT[i * n + t] * S.fT[t];
+    for (int t = 0; t < p; ++t) F += S.JxT[i * p + t] * S.xdT[t];
+    V* bw = S.Bw + size_t(i) * m;
+    for (int j = 0; j < m; ++j) bw[j] = jg[j] * inv;
+    const V y = (F + Kc * (c + s)) * inv;
+    S.y[i] = y;
+    S.y0[i] = y;
+    nrm += bw[0] * bw[0];
+  }
+
+  // ---- QR of the stacked [I_m; B] by m Householder reflections, so that
+  // M = I + J_G^T W J_G = R^T R is never formed: forming M squares the
+  // condition number (W reaches 1/tol^2 on active rows); the QR keeps it.
+  // Row j of the identity block is untouched until reflection j, so each
+  // reflector has the form v = [1 + |x|; x_B] with x = [1; B(:, j)].
+  // The same reflections applied to [0; y] give z with J_G^T W r = R^T z.
+  // Two passes over the rows per reflection: all dot products at once, then
+  // all updates (which also accumulate the next column's norm).
+  // Fully unrolled for compile-time m, so every dot[] lives in a register.
+#pragma GCC unroll 16
+  for (int j = 0; j < m; ++j) {
+    const V nr = vsqrt(nrm);
+    const V v0 = 1.0 + nr;
+    const V tau = 1.0 / (nr * v0);  // 2 / (v^T v), v^T v = 2 |x| (|x| + 1)
+    S.R[j * m + j] = -nr;
+    const int w = m - j - 1;  // columns right of j
+    V dot[MA + 1];            // dot[w] is the rhs column y
+    for (int cc = 0; cc <= w; ++cc) dot[cc] = V{};
+    for (int i = 0; i < k; ++i) {
+      const V* row = S.Bw + size_t(i) * m + j;
+      const V xb = row[0];
+      for (int cc = 0; cc < w; ++cc) dot[cc] += xb * row[1 + cc];
+      dot[w] += xb * S.y[i];
+    }
+    for (int cc = 0; cc <= w; ++cc) dot[cc] *= tau;
+    for (int cc = 0; cc < w; ++cc) S.R[j * m + j + 1 + cc] = -dot[cc] * v0;
+    S.z[j] = -dot[w] * v0;
+    nrm = splat(1.0);
+    for (int i = 0; i < k; ++i) {
+      V* row = S.Bw + size_t(i) * m + j;
+      const V xb = row[0];
+      for (int cc = 0; cc < w; ++cc) row[1 + cc] -= dot[cc] * xb;
+      S.y[i] -= dot[w] * xb;
+      if (w > 0) nrm += row[1] * row[1];
+    }
+  }
+
+  // R^-1 x and R^-T x in place (R upper triangular, row-major).
+  auto solve_R = [&](V* x) {
+    for (int i = m - 1; i >= 0; --i) {
+      V xi = x[i];
+      for (int q = i + 1; q < m; ++q) xi -= S.R[i * m + q] * x[q];
+      x[i] = xi / S.R[i * m + i];
+    }
+  };
+  auto solve_RT = [&](V* x) {
+    for (int i = 0; i < m; ++i) {
+      V xi = x[i];
+      for (int q = 0; q < i; ++q) xi -= S.R[q * m + i] * x[q];
+      x[i] = xi / S.R[i * m + i];
+    }
+  };
+  // b = -M^-1 J_G^T W r = -R^-1 z;  t = N_a alpha = R^-1 R^-T alpha.
+  for (int j = 0; j < m; ++j) {
+    S.b[j] = -S.z[j];
+    S.t[j] = S.alpha[j];
+  }
+  solve_R(S.b);
+  solve_RT(S.t);
+  solve_R(S.t);
+
+  // ---- lambda: largest scale of the tangential part keeping a in [-1, 1]^m.
+  V lam = splat(1.0);
+  VI bias_out = VI{};
+  for (int j = 0; j < m; ++j) {
+    const V b = S.b[j], t = S.t[j];
+    bias_out |= (b > 1.0) | (b < -1.0);
+    const V lim = t > 0.0 ? (1.0 - b) / t : (t < 0.0 ? (-1.0 - b) / t : splat(1.0));
+    lam = vmin(lim, lam);
+  }
+  // !(lam > 0) also catches NaN.
+  lam = (bias_out | ~(lam > 0.0)) ? V{} : lam;
+  for (int j = 0; j < m; ++j) S.a[j] = S.b[j] + lam * S.t[j];
+
+  // ---- slack controls u_s = -A^-1 (r + J_G a), into y.
+  VI ok = ~VI{};
+  for (int i = 0; i < k; ++i) {
+    const V* jg = S.JG + size_t(i) * m;
+    V acc = V{};
+#pragma GCC unroll 16
+    for (int j = 0; j < m; ++j) acc += jg[j] * S.a[j];
+    const V us = -(S.y0[i] + acc * S.inv[i]);
+    S.y[i] = us;
+    ok &= vfinite(us);
+  }
+  for (int j = 0; j < m; ++j) ok &= vfinite(S.a[j]);
+
+  // ---- scatter back to env-major outputs. Lanes with a non-finite model
+  // (NaN/Inf in f, G, c, J or xdot) stop: a = 0, u_s = 0, lambda = 0.
+  for (int j = 0; j < m; ++j) S.a[j] = ok ? S.a[j] : V{};
+  for (int i = 0; i < k; ++i) S.y[i] = ok ? S.y[i] : V{};
+  lam = ok ? lam : V{};
+  const int valid = hi - lo;
+  if (valid == L) {
+    double* dst[L];
+    for (int l = 0; l < L; ++l) dst[l] = B.a.data() + size_t(lo + l) * m;
+    scatter_lanes(S.a, m, dst);
+    for (int l = 0; l < L; ++l) dst[l] = B.slack_u.data() + size_t(lo + l) * k;
+    scatter_lanes(S.y, k, dst);
+    for (int l = 0; l < L; ++l) dst[l] = B.s.data() + size_t(lo + l) * k;
+    scatter_lanes(S.s, k, dst);
+  } else {
+    for (int l = 0; l < valid; ++l) {
+      const size_t e = size_t(lo + l);
+      for (int j = 0; j < m; ++j) B.a[e * m + j] = S.a[j][l];
+      for (int i = 0; i < k; ++i) B.slack_u[e * k + i] = S.y[i][l];
+      for (int i = 0; i < k; ++i) B.s[e * k + i] = S.s[i][l];
+    }
+  }
+  for (int l = 0; l < valid; ++l) {
+    B.lambda[lo + l] = lam[l];
+    B.status[lo + l] = (alpha_bad[l] ? kStatusAlphaNonFinite : 0u) | (bias_out[l] ? kStatusBiasOutOfBounds : 0u) |
+                       (ok[l] ? 0u : kStatusModelNonFinite);
+  }
+
+  if (store_basis) {
+    // N_a = M^-1 = R^-1 R^-T, one column per unit right-hand side.
+    for (int col = 0; col < m; ++col) {
+      for (int j = 0; j < m; ++j) S.t[j] = splat(j == col ? 1.0 : 0.0);
+      solve_RT(S.t);
+      solve_R(S.t);
+      for (int l = 0; l < hi - lo; ++l) {
+        double* Na = B.Na.data() + size_t(lo + l) * m * m;
+        for (int j = 0; j < m; ++j) Na[j * m + col] = S.t[j][l];
+      }
+    }
+  }
+}
+
+using LaneFn = void (*)(const ProjectorModel&, ProjectorBatch&, int, int, LaneScratch&, bool);
+
+// Compile-time m for the common action dimensions; dynamic beyond.
+LaneFn lane_kernel_for(int m) {
+  switch (m) {
+    case 1: return project_lanes<1>;
+    case 2: return project_lanes<2>;
+    case 3: return project_lanes<3>;
+    case 4: return project_lanes<4>;
+    case 5: return project_lanes<5>;
+    case 6: return project_lanes<6>;
+    case 7: return project_lanes<7>;
+    case 8: return project_lanes<8>;
+    default: return nullptr;
+  }
+}
+
+// Per-env scratch for the general path (equality rows / smooth basis).
+struct GeneralScratch {
+  Eigen::MatrixXd JG, Jq, G, stack, Rinv, Minv, JE, S, Na, T;
+  Eigen::VectorXd F, r, rate, rhs, z, alpha, b, t, a, rE, mu;
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
+};
+
+// Symmetric PSD (pseudo-)square root and (pseudo-)inverse through one
+// eigen-decomposition; eigenvalues below rel * max are treated as zero.
+void psd_functions(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eig, const Eigen::MatrixXd& X, double rel,
+                   Eigen::MatrixXd* sqrt_out, Eigen::MatrixXd* pinv_out, bool* rank_loss) {
+  eig.compute(X);
+  const Eigen::VectorXd& ev = eig.eigenvalues();
+  const Eigen::MatrixXd& V = eig.eigenvectors();
+  const double emax = ev.size() ? std::max(ev.maxCoeff(), 0.0) : 0.0;
+  const double thr = emax * rel;
+  Eigen::VectorXd sq(ev.size()), inv(ev.size());
+  bool loss = false;
+  for (Eigen::Index i = 0; i < ev.size(); ++i) {
+    const bool pos = ev(i) > thr && ev(i) > 0.0;
+    loss = loss || !pos;
+    sq(i) = pos ? std::sqrt(ev(i)) : 0.0;
+    inv(i) = pos ? 1.0 / ev(i) : 0.0;
+  }
+  if (sqrt_out) *sqrt_out = V * sq.asDiagonal() * V.transpose();
+  if (pinv_out) *pinv_out = V * inv.asDiagonal() * V.transpose();
+  if (rank_loss) *rank_loss = loss;
+}
+
+void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, GeneralScratch& W, bool store_basis) {
+  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p;
+  uint32_t status = 0;
+  W.alpha.resize(m);
+  const double* al = B.alpha.data() + size_t(e) * m;
+  for (int j = 0; j < m; ++j) {
+    double v = al[j];
+    if (!finite(v)) { v = 0.0; status |= kStatusAlphaNonFinite; }
+    W.alpha(j) = std::clamp(v, -1.0, 1.0);
+  }
+  W.Jq = Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.Jq.data() + size_t(e) * k * n, k, n);
+  if (mod.g_form == GForm::Diagonal) {
+    W.JG = W.Jq * Eigen::Map<const Eigen::VectorXd>(B.G.data() + size_t(e) * n, n).asDiagonal();
+  } else {
+    W.G = Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.G.data() + size_t(e) * n * m, n, m);
+    W.JG = W.Jq * W.G;
+  }
+  W.F = Eigen::VectorXd::Zero(k);
+  if (mod.has_drift) W.F += W.Jq * Eigen::Map<const Eigen::VectorXd>(B.f.data() + size_t(e) * n, n);
+  if (p > 0)
+    W.F += Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.Jx.data() + size_t(e) * k * p, k, p) *
+           Eigen::Map<const Eigen::VectorXd>(B.xdot.data() + size_t(e) * p, p);
+
+  const double* c = B.c.data() + size_t(e) * k;
+  double* s_out = B.s.data() + size_t(e) * k;
+  W.r.resize(k);
+  W.rate.resize(k);
+  const int ke = mod.num_equality();
+  const int ki = k - ke;
+  W.JE.resize(ke, m);
+  W.rE.resize(ke);
+  // [I; A^-1 J_I] and [0; A^-1 r_I]: their QR gives I + J_I^T W J_I = R^T R
+  // and J_I^T W r_I = R^T z without forming the products (as in the fast path).
+  W.stack.setZero(m + ki, m);
+  W.stack.topRows(m).setIdentity();
+  W.rhs.setZero(m + ki);
+  for (int i = 0, ie = 0, ii = 0; i < k; ++i) {
+    if (mod.equality[i]) {
+      s_out[i] = 0.0;
+      W.r(i) = W.F(i) + mod.K_c * c[i];
+      W.JE.row(ie) = W.JG.row(i);
+      W.rE(ie++) = W.r(i);
+      continue;
+    }
+    const double s = slack_value(c[i], mod.tol[i]);
+    s_out[i] = s;
+    W.rate(i) = slack_rate(mod.slack[i], s, mod.beta[i], mod.tol[i]);
+    W.r(i) = W.F(i) + mod.K_c * (c[i] + s);
+    W.stack.row(m + ii) = W.JG.row(i) / W.rate(i);
+    W.rhs(m + ii++) = W.r(i) / W.rate(i);
+  }
+
+  double* a_out = B.a.data() + size_t(e) * m;
+  double* us_out = B.slack_u.data() + size_t(e) * k;
+  const bool model_ok = W.stack.allFinite() && W.rhs.allFinite() && W.r.allFinite() && W.JE.allFinite();
+  if (model_ok) {
+    W.qr.compute(W.stack);
+    W.z = (W.qr.householderQ().transpose() * W.rhs).head(m);
+    const auto R = W.qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+    W.Rinv = R.solve(Eigen::MatrixXd::Identity(m, m));
+    W.Minv = W.Rinv * W.Rinv.transpose();
+    W.b = -(W.Rinv * W.z);
+    const Eigen::VectorXd g = R.transpose() * W.z;  // J_I^T W r_I
+    if (ke > 0) {
+      // Equality rows: the tangent space is restricted to null(J_E) in the
+      // M-metric. S = J_E M^-1 J_E^T; dependent rows are solved in least squares.
+      W.S = W.JE * W.Minv * W.JE.transpose();
+      Eigen::MatrixXd Spinv;
+      bool loss = false;
+      psd_functions(W.eig, W.S, 1e-12, nullptr, &Spinv, &loss);
+      if (loss) status |= kStatusEqualityRankLoss;
+      const Eigen::MatrixXd MJ = W.Minv * W.JE.transpose();  // (m x ke)
+      W.Na = W.Minv - MJ * Spinv * MJ.transpose();
+      W.mu = Spinv * (W.JE * W.Minv * g - W.rE);
+      W.b = W.Minv * (W.JE.transpose() * W.mu - g);
+    } else {
+      W.Na = W.Minv;
+    }
+    if (mod.basis == BasisType::Smooth) {
+      // Action block of the Procrustes basis: N_a^{1/2} (see docs/projector.md).
+      psd_functions(W.eig, W.Na, 1e-13, &W.T, nullptr, nullptr);
+    } else {
+      W.T = W.Na;
+    }
+    W.t = W.T * W.alpha;
+    bool bias_out = false;
+    const double lam = tangent_scale(W.b.data(), W.t.data(), m, &bias_out);
+    if (bias_out) status |= kStatusBiasOutOfBounds;
+    W.a = W.b + lam * W.t;
+    bool ok = W.a.allFinite();
+    for (int i = 0; i < k; ++i) {
+      if (mod.equality[i]) { us_out[i] = 0.0; continue; }
+      us_out[i] = -(W.r(i) + W.JG.row(i).dot(W.a)) / W.rate(i);
+      ok = ok && finite(us_out[i]);
+    }
+    if (ok) {
+      for (int j = 0; j < m; ++j) a_out[j] = W.a(j);
+      B.lambda[e] = lam;
+      if (store_basis) Eigen::Map<Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.Na.data() + size_t(e) * m * m, m, m) = W.T;
+      B.status[e] = status;
+      return;
+    }
+  }
+  for (int j = 0; j < m; ++j) a_out[j] = 0.0;
+  for (int i = 0; i < k; ++i) us_out[i] = 0.0;
+  B.lambda[e] = 0.0;
+  B.status[e] = status | kStatusModelNonFinite;
+  if (store_basis) std::fill_n(B.Na.data() + size_t(e) * m * m, size_t(m) * m, 0.0);
+}
+
+void check_batch(const ProjectorModel& mod, const ProjectorBatch& B) {
+  const size_t N = static_cast<size_t>(B.N);
+  const size_t gsz = mod.g_form == GForm::Diagonal ? size_t(mod.n) : size_t(mod.n) * mod.m;
+  const bool ok = B.G.size() == N * gsz && B.c.size() == N * mod.k && B.Jq.size() == N * mod.k * mod.n &&
+                  B.Jx.size() == N * mod.k * mod.p && B.xdot.size() == N * mod.p && B.alpha.size() == N * mod.m &&
+                  B.a.size() == N * mod.m && B.slack_u.size() == N * mod.k && B.s.size() == N * mod.k &&
+                  B.lambda.size() == N && B.status.size() == N && (!mod.has_drift || B.f.size() == N * mod.n);
+  if (!ok) throw std::invalid_argument("projector batch: array sizes do not match the model (use ProjectorBatch(model, N))");
+}
+
+}  // namespace
+
+void project_range(const ProjectorModel& mod, ProjectorBatch& B, int begin, int end, const ProjectOptions& opt) {
+  if (begin >= end) return;
+  if (opt.store_basis && B.Na.size() != size_t(B.N) * mod.m * mod.m) B.Na.assign(size_t(B.N) * mod.m * mod.m, 0.0);
+  // Lane kernels: compile-time m up to 8, dynamic m up to 16 (accumulator
+  // capacity); larger m takes the general path.
+  const bool fast = mod.num_equality() == 0 && mod.basis == BasisType::Projected && mod.m <= 16;
+  if (fast) {
+    thread_local LaneScratch scratch;
+    scratch.setup(mod);
+    LaneFn fn = lane_kernel_for(mod.m);
+    if (!fn) fn = project_lanes<0>;
+    for (int lo = begin; lo < end; lo += kLanes) fn(mod, B, lo, std::min(lo + kLanes, end), scratch, opt.store_basis);
+  } else {
+    thread_local GeneralScratch scratch;
+    for (int e = begin; e < end; ++e) project_general_one(mod, B, e, scratch, opt.store_basis);
+  }
+}
+
+void project_batch(const ProjectorModel& mod, ProjectorBatch& B, const ProjectOptions& opt) {
+  mod.validate();
+  check_batch(mod, B);
+  if (opt.store_basis && B.Na.size() != size_t(B.N) * mod.m * mod.m) B.Na.assign(size_t(B.N) * mod.m * mod.m, 0.0);
+  if (!opt.parallel) {
+    project_range(mod, B, 0, B.N, opt);
+    return;
+  }
+  parallel_blocks(B.N, kBlockEnvs, [&](int64_t lo, int64_t hi) {
+    project_range(mod, B, static_cast<int>(lo), static_cast<int>(hi), opt);
+  });
+}
+
+}  // namespace atacom

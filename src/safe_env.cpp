@@ -1,0 +1,92 @@
+#include "atacom/safe_env.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+
+#include "atacom/parallel.hpp"
+
+namespace atacom {
+
+namespace {
+constexpr int kBlock = 256;  // envs per task: constraint model + projection stay in cache together
+}
+
+SafeEnv::SafeEnv(std::unique_ptr<ControlAffineEnv> inner, const ProjectorModel& model)
+    : inner_(std::move(inner)), model_(model) {
+  if (!inner_) throw std::invalid_argument("SafeEnv: no inner env");
+  model_.validate();
+  const EnvSpec& is = inner_->spec();
+  if (model_.m != is.act_dim)
+    throw std::invalid_argument("SafeEnv: projector has m = " + std::to_string(model_.m) + " controls but env '" +
+                                is.name + "' has " + std::to_string(is.act_dim) + " actions");
+  if (model_.k != is.num_constraints)
+    throw std::invalid_argument("SafeEnv: projector has k = " + std::to_string(model_.k) + " rows but env '" +
+                                is.name + "' reports " + std::to_string(is.num_constraints) + " constraints");
+  spec_ = is;
+  inner_info_ = static_cast<int>(is.info_names.size());
+  spec_.info_names.insert(spec_.info_names.end(), {"atacom_lambda", "atacom_bias_out", "max_constraint"});
+  spec_.info_reduce.insert(spec_.info_reduce.end(), {InfoReduce::Mean, InfoReduce::Sum, InfoReduce::Max});
+  pb_.resize(model_, inner_->num_envs());
+  buffers_.resize(spec_, inner_->num_envs());
+  mirror_buffers();
+}
+
+void SafeEnv::seed(uint64_t seed) {
+  inner_->seed(seed);
+  mirror_buffers();
+}
+
+void SafeEnv::reset(const uint8_t* mask) {
+  inner_->reset(mask);
+  mirror_buffers();
+}
+
+void SafeEnv::load_state(std::istream& in) {
+  inner_->load_state(in);
+  mirror_buffers();
+}
+
+void SafeEnv::step(const double* alpha) {
+  const int N = inner_->num_envs();
+  const int m = model_.m;
+  std::copy_n(alpha, size_t(N) * m, pb_.alpha.data());
+  // Constraint model and projection of one block run back to back, so the
+  // Jacobians the env just wrote are still in cache when the kernel reads them.
+  parallel_blocks(N, kBlock, [&](int64_t lo, int64_t hi) {
+    inner_->constraint_model(pb_, static_cast<int>(lo), static_cast<int>(hi));
+    project_range(model_, pb_, static_cast<int>(lo), static_cast<int>(hi));
+  });
+  inner_->step(pb_.a.data());
+  mirror_buffers();
+  const int k = model_.k;
+  const size_t ni = spec_.info_names.size();
+  for (int i = 0; i < N; ++i) {
+    float* info = buffers_.info.data() + size_t(i) * ni + inner_info_;
+    info[0] = static_cast<float>(pb_.lambda[i]);
+    info[1] = (pb_.status[i] & (kStatusBiasOutOfBounds | kStatusModelNonFinite)) ? 1.0f : 0.0f;
+    const double* c = buffers_.constraints.data() + size_t(i) * k;
+    double mx = k ? c[0] : 0.0;
+    for (int r = 1; r < k; ++r) mx = std::max(mx, c[r]);
+    info[2] = static_cast<float>(mx);
+  }
+}
+
+void SafeEnv::mirror_buffers() {
+  const EnvBuffers& in = inner_->buffers();
+  EnvBuffers& out = buffers_;
+  out.obs = in.obs;
+  out.final_obs = in.final_obs;
+  out.reward = in.reward;
+  out.cost = in.cost;
+  out.terminated = in.terminated;
+  out.truncated = in.truncated;
+  out.constraints = in.constraints;
+  out.episode_return = in.episode_return;
+  out.episode_length = in.episode_length;
+  const size_t ni = spec_.info_names.size(), nin = static_cast<size_t>(inner_info_);
+  for (int i = 0; i < in.N; ++i)
+    std::copy_n(in.info.data() + size_t(i) * nin, nin, out.info.data() + size_t(i) * ni);
+}
+
+}  // namespace atacom
