@@ -7,10 +7,6 @@
 // shared machines only ever slow a window down). sac_update includes replay
 // sampling; flops counts every GEMM of one update (forward and backward), as
 // the tape executes them.
-// GCC 12 reports false -Wmaybe-uninitialized inside its AVX-512 intrinsics when
-// Eigen's GEMM kernels are inlined; the warning is not ours.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>

@@ -1,7 +1,3 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside its AVX-512 intrinsics when
-// Eigen's vectorised sqrt is inlined here; the warning is not ours.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-
 #include "atacom/adam.hpp"
 
 #include <cmath>

@@ -1,7 +1,3 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside its own AVX-512 intrinsics
-// when Eigen's double GEMM kernels are inlined here; the warning is not ours.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-
 #include "atacom/autodiff.hpp"
 
 #include <algorithm>
