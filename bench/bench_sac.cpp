@@ -94,8 +94,8 @@ void bench_actor_act(int N, int threads) {
   for (int i = 0; i < N; ++i) rngs.emplace_back(5, uint64_t(i));
   std::vector<double> act(size_t(N) * A);
   const double calls = best_rate([&]() { sac.act(obs.data(), N, false, rngs.data(), act.data()); });
-  std::printf("{\"bench\": \"actor_act\", \"obs\": %d, \"act\": %d, \"hidden\": [256, 256], \"N\": %d, "
-              "\"threads\": %d, \"per_s\": %.0f}\n", D, A, N, threads, calls * N);
+  // obs 20, act 7, hidden 256-256 like sac_update; stochastic actions
+  std::printf("{\"bench\": \"actor_act\", \"N\": %d, \"threads\": %d, \"per_s\": %.0f}\n", N, threads, calls * N);
   std::fflush(stdout);
 }
 

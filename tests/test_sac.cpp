@@ -82,6 +82,9 @@ TEST_CASE("sac: actions are in [-1, 1]; deterministic is tanh(mean), stochastic 
   REQUIRE(sto == sto2);
   REQUIRE(sto != det);
   for (double a : sto) REQUIRE(std::abs(a) <= 1.0);
+  const size_t allocs = sac.allocations();
+  for (int k = 0; k < 3; ++k) sac.act(obs.data(), 5, false, s1.data(), sto.data());
+  REQUIRE(sac.allocations() == allocs);  // acting allocates nothing after the first call
   // row 3 alone gives the same action as row 3 in the batch
   std::vector<Rng> s3 = {Rng(7, 3)};
   double one[3];

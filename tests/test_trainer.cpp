@@ -95,6 +95,32 @@ TEST_CASE("trainer: run directory outputs", "[trainer]") {
   fs::remove_all(dir);
 }
 
+TEST_CASE("trainer: updates per env step below and above one, N envs", "[trainer]") {
+  for (double ratio : {0.5, 2.0}) {
+    json cfg = small_run(600);
+    cfg["train"]["num_envs"] = 3;
+    cfg["train"]["eval_every"] = 600;
+    cfg["sac"]["updates_per_step"] = ratio;
+    cfg["sac"]["obs_norm"] = false;
+    const std::string dir = tmp_dir("ratio");
+    const auto s = train(cfg, dir);
+    // expected: the budget grows by ratio * N per batch step; an update runs
+    // when the replay holds more than initial_replay (200) transitions
+    int64_t expect = 0;
+    double budget = 0;
+    for (int k = 1; k <= 200; ++k) {
+      budget += ratio * 3;
+      while (budget >= 1.0) {
+        budget -= 1.0;
+        expect += 3 * k > 200;
+      }
+    }
+    REQUIRE(s.updates == expect);
+    REQUIRE(s.env_steps == 600);
+    fs::remove_all(dir);
+  }
+}
+
 TEST_CASE("trainer: bitwise identical with 1 and 2 threads", "[trainer]") {
   // Shapes above one GEMM tile (256 rows x 128 columns) so the partition and
   // the TBB path are exercised.

@@ -68,6 +68,8 @@ class Sac {
   // Actions (N x act_dim) in [-1, 1] for obs (N x obs_dim). Stochastic
   // actions draw row i's noise from rngs[i] (per-env streams); deterministic
   // ones are tanh(mean). No allocation after the first call with this N.
+  // Non-finite observations give non-finite actions, which every env treats
+  // as 0 and counts (env contract).
   void act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions);
 
   // One gradient update on a sampled batch (B == batch_size).
