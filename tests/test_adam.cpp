@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/adam.hpp"
+#include "atacom/rng.hpp"
 
 TEST_CASE("adam: matches the bias-corrected update rule", "[adam]") {
   atacom::Adam<double> opt(2, atacom::default_adam_config());
@@ -36,6 +37,26 @@ TEST_CASE("adam: matches the bias-corrected update rule", "[adam]") {
   atacom::Adam<double> wrong(3, atacom::default_adam_config());
   s.seekg(0);
   REQUIRE_THROWS_WITH(wrong.load(s), Catch::Contains("expected 3"));
+}
+
+TEST_CASE("adam: the fused step equals step + zero_grad + Polyak", "[adam]") {
+  const size_t n = 40000;  // several parallel blocks
+  std::vector<float> p(n), g(n), tgt(n);
+  atacom::Rng r(3, 0);
+  for (size_t i = 0; i < n; ++i) { p[i] = float(r.uniform(-1, 1)); g[i] = float(r.uniform(-1, 1)); tgt[i] = float(r.uniform(-1, 1)); }
+  auto p2 = p, g2 = g, tgt2 = tgt;
+  atacom::Adam<float> a(n, atacom::default_adam_config()), b(n, atacom::default_adam_config());
+  for (int k = 0; k < 3; ++k) {
+    a.step(p.data(), g.data(), 1e-3);
+    atacom::polyak_update(tgt.data(), p.data(), n, 0.01);
+    b.step_fused(p2.data(), g2.data(), 1e-3, tgt2.data(), 0.01);
+    for (size_t i = 0; i < n; ++i) REQUIRE(g2[i] == 0.0f);
+    g2 = g;
+  }
+  for (size_t i = 0; i < n; i += 97) {
+    REQUIRE(p2[i] == Approx(p[i]).epsilon(1e-6).margin(1e-7));
+    REQUIRE(tgt2[i] == Approx(tgt[i]).epsilon(1e-6).margin(1e-7));
+  }
 }
 
 TEST_CASE("adam: gradient clipping and Polyak averaging", "[adam]") {

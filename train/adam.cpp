@@ -57,6 +57,30 @@ void Adam<T>::step(T* p, const T* g, double lr) {
 }
 
 template <class T>
+void Adam<T>::step_fused(T* p, T* g, double lr, T* target, double tau) {
+  ++t_;
+  const T b1 = T(cfg_.beta1), b2 = T(cfg_.beta2), eps = T(cfg_.eps);
+  const T step_size = T(lr / (1.0 - std::pow(cfg_.beta1, double(t_))));
+  const T inv_sqrt_bc2 = T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_))));
+  const T ta = T(1.0 - tau), tb = T(tau);
+  T* m = m_.data();
+  T* v = v_.data();
+  parallel_blocks(int64_t(m_.size()), kBlock, [&](int64_t lo, int64_t hi) {
+    using A = Eigen::Array<T, Eigen::Dynamic, 1>;
+    const Eigen::Index n = hi - lo;
+    Eigen::Map<A> P(p + lo, n), M(m + lo, n), V(v + lo, n), G(g + lo, n);
+    M = b1 * M + (T(1) - b1) * G;
+    V = b2 * V + (T(1) - b2) * G.square();
+    P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
+    G.setZero();
+    if (target) {
+      Eigen::Map<A> Tg(target + lo, n);
+      Tg = ta * Tg + tb * P;
+    }
+  });
+}
+
+template <class T>
 void Adam<T>::save(std::ostream& out) const {
   bin::write_pod<int64_t>(out, t_);
   bin::write_vec(out, m_);

@@ -172,8 +172,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     const auto q = critic_.forward(t, t.concat(obs, pi.action), false);
     const auto qmin = t.minimum(t.slice(q, 0, 1), t.slice(q, 1, 2));
     const auto loss = t.mean(t.sub(t.affine(pi.logp, alpha, 0.0f), qmin));
-    actor_.zero_grad();
-    t.backward(loss);
+    t.backward(loss);  // actor grads are zero here: the last step_fused cleared them
     const float* lp = t.value(pi.logp).data;
     for (int i = 0; i < B; ++i) mean_logp += lp[i];
     mean_logp /= B;
@@ -200,8 +199,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     const auto q = critic_.forward(t, t.concat(obs, t.constant(batch.action.data(), B, A)), true);
     const auto err = t.sub(q, t.constant(y_.data(), B, 1));
     const auto loss = t.sum(t.mean(t.square(err), 0));
-    critic_.zero_grad();
-    t.backward(loss);
+    t.backward(loss);  // critic grads are zero here: the last step_fused cleared them
     st.critic_loss = 0.5 * t.scalar(loss);  // mean over the two critics
     double qm = 0;
     const float* qv = t.value(q).data;
@@ -221,7 +219,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
       throw std::runtime_error("SAC actor update produced a non-finite loss "
                                "(lower lr_actor/lr_alpha or check the rewards)");
     if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
-    actor_opt_.step(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
+    actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
     const double g_alpha = -(mean_logp + target_entropy_);
     st.alpha_loss = -log_alpha_ * (mean_logp + target_entropy_);
     alpha_opt_.step(&log_alpha_, &g_alpha, cfg_.lr_alpha);
@@ -229,8 +227,9 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     st.actor_updated = true;
   }
   if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
-  critic_opt_.step(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic);
-  polyak_update(critic_target_.params().data(), critic_.params().data(), critic_.params().size(), cfg_.tau);
+  // critic step, gradient reset and target Polyak update in one pass
+  critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic,
+                         critic_target_.params().data(), cfg_.tau);
   return st;
 }
 

@@ -30,6 +30,10 @@ class Adam {
   // One step: p -= lr * mhat / (sqrt(vhat) + eps), with
   // mhat = m / (1 - beta1^t), vhat = v / (1 - beta2^t).
   void step(T* params, const T* grads, double lr);
+  // The same step fused with what the training loop does next, in one pass
+  // over memory: zero the gradients (ready for the next backward) and, when
+  // target != null, Polyak-average it: target = (1 - tau) target + tau params.
+  void step_fused(T* params, T* grads, double lr, T* target = nullptr, double tau = 0.0);
 
   size_t size() const { return m_.size(); }
   int64_t steps() const { return t_; }
