@@ -345,16 +345,30 @@ struct UnaryRule {
   }
 };
 
-template <class T, class F>
-void elementwise(Op op, const T* __restrict x, T* __restrict y, int64_t n, T s0, T s1, F&& par) {
-  par(n, [&](int64_t lo, int64_t hi) {
-    switch (op) {  // the hot ones get their own loop so they vectorise
-      case Op::Relu: for (int64_t i = lo; i < hi; ++i) y[i] = x[i] > T(0) ? x[i] : T(0); break;
-      case Op::Affine: for (int64_t i = lo; i < hi; ++i) y[i] = s0 * x[i] + s1; break;
-      case Op::Square: for (int64_t i = lo; i < hi; ++i) y[i] = x[i] * x[i]; break;
-      default: for (int64_t i = lo; i < hi; ++i) y[i] = UnaryRule<T>::f(op, x[i], s0, s1);
-    }
-  });
+// Loops over [lo, hi) with every pointer passed by value and restrict-
+// qualified (the tape never aliases a node's value and gradient buffers), so
+// the compiler vectorises them; pointers captured by reference in a lambda
+// would be reloaded on every iteration instead.
+template <class T>
+void unary_forward(Op op, const T* __restrict x, T* __restrict y, int64_t lo, int64_t hi, T s0, T s1) {
+  switch (op) {
+    case Op::Relu: for (int64_t i = lo; i < hi; ++i) y[i] = x[i] > T(0) ? x[i] : T(0); break;
+    case Op::Affine: for (int64_t i = lo; i < hi; ++i) y[i] = s0 * x[i] + s1; break;
+    case Op::Square: for (int64_t i = lo; i < hi; ++i) y[i] = x[i] * x[i]; break;
+    default: for (int64_t i = lo; i < hi; ++i) y[i] = UnaryRule<T>::f(op, x[i], s0, s1);
+  }
+}
+
+template <class T>
+void unary_backward(Op op, T* __restrict gx, const T* __restrict x, const T* __restrict y,
+                    const T* __restrict gy, int64_t lo, int64_t hi, T s0, T s1) {
+  switch (op) {
+    case Op::Relu: for (int64_t i = lo; i < hi; ++i) gx[i] += x[i] > T(0) ? gy[i] : T(0); break;
+    case Op::Tanh: for (int64_t i = lo; i < hi; ++i) gx[i] += gy[i] * (T(1) - y[i] * y[i]); break;
+    case Op::Affine: for (int64_t i = lo; i < hi; ++i) gx[i] += gy[i] * s0; break;
+    case Op::Square: for (int64_t i = lo; i < hi; ++i) gx[i] += gy[i] * (T(2) * x[i]); break;
+    default: for (int64_t i = lo; i < hi; ++i) gx[i] += gy[i] * UnaryRule<T>::d(op, x[i], y[i], s0, s1);
+  }
 }
 }  // namespace
 
@@ -370,22 +384,12 @@ template <class T>
 void Tape<T>::back_unary(const Node& y) {
   const Node& x = node(y.a);
   if (!x.needs_grad) return;
-  const T s0 = y.s0, s1 = y.s1;
   const Op op = y.op;
-  // restrict: the tape never aliases a node's value and gradient buffers,
-  // which lets the compiler vectorise these loops.
-  T* __restrict gx = x.g;
-  const T* __restrict xv = x.v;
-  const T* __restrict yv = y.v;
-  const T* __restrict gy = y.g;
-  for_elems(y.rows * int64_t(y.cols), [&](int64_t lo, int64_t hi) {
-    switch (op) {
-      case Op::Relu: for (int64_t i = lo; i < hi; ++i) gx[i] += xv[i] > T(0) ? gy[i] : T(0); break;
-      case Op::Tanh: for (int64_t i = lo; i < hi; ++i) gx[i] += gy[i] * (T(1) - yv[i] * yv[i]); break;
-      case Op::Affine: for (int64_t i = lo; i < hi; ++i) gx[i] += gy[i] * s0; break;
-      default: for (int64_t i = lo; i < hi; ++i) gx[i] += gy[i] * UnaryRule<T>::d(op, xv[i], yv[i], s0, s1);
-    }
-  });
+  T* gx = x.g;
+  const T *xv = x.v, *yv = y.v, *gy = y.g;
+  const T s0 = y.s0, s1 = y.s1;
+  for_elems(y.rows * int64_t(y.cols),
+            [=](int64_t lo, int64_t hi) { unary_backward<T>(op, gx, xv, yv, gy, lo, hi, s0, s1); });
 }
 
 #define ATACOM_UNARY(method, OPNAME, S0, S1)                                                   \
@@ -396,8 +400,10 @@ void Tape<T>::back_unary(const Node& y) {
     y.s0 = S0;                                                                                 \
     y.s1 = S1;                                                                                 \
     const Node& xn = node(x);                                                                  \
-    elementwise(Op::OPNAME, xn.v, y.v, y.rows * int64_t(y.cols), y.s0, y.s1,                   \
-                [](int64_t n, auto&& fn) { for_elems(n, fn); });                               \
+    const T *xv = xn.v, s0 = y.s0, s1 = y.s1;                                                  \
+    T* yv = y.v;                                                                               \
+    for_elems(y.rows * int64_t(y.cols),                                                        \
+              [=](int64_t lo, int64_t hi) { unary_forward<T>(Op::OPNAME, xv, yv, lo, hi, s0, s1); }); \
     return id;                                                                                 \
   }
 ATACOM_UNARY(affine(Id x, T scale, T shift), Affine, scale, shift)
