@@ -260,6 +260,19 @@ struct BinaryRule {
 };
 }  // namespace
 
+namespace {
+// Same-shape fast path; pointers by value and restrict so each loop vectorises.
+template <class T>
+void binary_forward(Op op, const T* __restrict a, const T* __restrict b, T* __restrict y, int64_t lo, int64_t hi) {
+  switch (op) {
+    case Op::Add: for (int64_t i = lo; i < hi; ++i) y[i] = a[i] + b[i]; break;
+    case Op::Sub: for (int64_t i = lo; i < hi; ++i) y[i] = a[i] - b[i]; break;
+    case Op::Mul: for (int64_t i = lo; i < hi; ++i) y[i] = a[i] * b[i]; break;
+    default: for (int64_t i = lo; i < hi; ++i) y[i] = a[i] <= b[i] ? a[i] : b[i];
+  }
+}
+}  // namespace
+
 template <class T>
 typename Tape<T>::Id Tape<T>::binary(Op op, Id ai, Id bi) {
   const Node& a = node(ai);
@@ -273,14 +286,7 @@ typename Tape<T>::Id Tape<T>::binary(Op op, Id ai, Id bi) {
   const T* bv = b.v;
   T* yv = y.v;
   if (a.rows == b.rows && a.cols == b.cols) {
-    for_elems(y.rows * int64_t(y.cols), [&](int64_t lo, int64_t hi) {
-      switch (op) {  // hoisted so each loop vectorises
-        case Op::Add: for (int64_t i = lo; i < hi; ++i) yv[i] = av[i] + bv[i]; break;
-        case Op::Sub: for (int64_t i = lo; i < hi; ++i) yv[i] = av[i] - bv[i]; break;
-        case Op::Mul: for (int64_t i = lo; i < hi; ++i) yv[i] = av[i] * bv[i]; break;
-        default: for (int64_t i = lo; i < hi; ++i) yv[i] = av[i] <= bv[i] ? av[i] : bv[i];
-      }
-    });
+    for_elems(y.rows * int64_t(y.cols), [=](int64_t lo, int64_t hi) { binary_forward<T>(op, av, bv, yv, lo, hi); });
   } else {
     const int64_t ars = a.rows == 1 ? 0 : a.cols, acs = a.cols == 1 ? 0 : 1;
     const int64_t brs = b.rows == 1 ? 0 : b.cols, bcs = b.cols == 1 ? 0 : 1;
