@@ -448,72 +448,119 @@ LaneFn lane_kernel_for(int m) {
   }
 }
 
-// Per-env scratch for the general path (equality rows / smooth basis).
+// Per-env scratch for the general path. Every matrix is sized once per
+// model shape; afterwards all products write into these buffers (noalias,
+// in-place solves), so the path does not allocate per call.
 struct GeneralScratch {
-  Eigen::MatrixXd JG, Jq, G, stack, Rinv, Minv, JE, S, Na, T;
-  Eigen::VectorXd F, r, rate, rhs, z, alpha, b, t, a, rE, mu;
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
+  using Mat = Eigen::MatrixXd;
+  using Vec = Eigen::VectorXd;
+  using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  int n = -1, m = -1, k = -1, ke = -1, p = -1;
+  Mat JG, stack, R, Rinv, Minv, JE, MJ, S, Spinv, Na, T, A, V, VD, MJS;
+  Vec F, r, rate, z, g, alpha, b, t, a, rE, mu, d, Mg, JEMg;
+  Eigen::HouseholderQR<Mat> qr;
+
+  void setup(const ProjectorModel& mod) {
+    const int e = mod.num_equality();
+    if (mod.n == n && mod.m == m && mod.k == k && e == ke && mod.p == p) return;
+    n = mod.n; m = mod.m; k = mod.k; ke = e; p = mod.p;
+    const int ki = k - ke;
+    JG.resize(k, m); stack.resize(m + ki, m + 1); R.resize(m, m); Rinv.resize(m, m); Minv.resize(m, m);
+    JE.resize(ke, m); MJ.resize(m, ke); S.resize(ke, ke); Spinv.resize(ke, ke); Na.resize(m, m); T.resize(m, m);
+    MJS.resize(m, ke);
+    F.resize(k); r.resize(k); rate.resize(k); z.resize(m); g.resize(m); alpha.resize(m);
+    b.resize(m); t.resize(m); a.resize(m); rE.resize(ke); mu.resize(ke); Mg.resize(m); JEMg.resize(ke);
+    qr = Eigen::HouseholderQR<Mat>(m + ki, m + 1);
+  }
 };
 
-// Symmetric PSD (pseudo-)square root and (pseudo-)inverse through one
-// eigen-decomposition; eigenvalues below rel * max are treated as zero.
-void psd_functions(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eig, const Eigen::MatrixXd& X, double rel,
-                   Eigen::MatrixXd* sqrt_out, Eigen::MatrixXd* pinv_out, bool* rank_loss) {
-  eig.compute(X);
-  const Eigen::VectorXd& ev = eig.eigenvalues();
-  const Eigen::MatrixXd& V = eig.eigenvectors();
-  const double emax = ev.size() ? std::max(ev.maxCoeff(), 0.0) : 0.0;
-  const double thr = emax * rel;
-  Eigen::VectorXd sq(ev.size()), inv(ev.size());
-  bool loss = false;
-  for (Eigen::Index i = 0; i < ev.size(); ++i) {
-    const bool pos = ev(i) > thr && ev(i) > 0.0;
-    loss = loss || !pos;
-    sq(i) = pos ? std::sqrt(ev(i)) : 0.0;
-    inv(i) = pos ? 1.0 / ev(i) : 0.0;
+// Cyclic Jacobi eigen-decomposition of the symmetric A (overwritten): V holds
+// the eigenvectors (columns), d the eigenvalues. Small matrices only (m or the
+// number of equality rows); no allocation; sweeps until the off-diagonal mass
+// is below 1e-30 of the total (quadratic convergence: a handful of sweeps).
+void jacobi_eigen(Eigen::MatrixXd& A, Eigen::MatrixXd& V, Eigen::VectorXd& d) {
+  const Eigen::Index n = A.rows();
+  V.setIdentity(n, n);
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    double off = 0.0, total = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = 0; j < n; ++j) (i == j ? total : off) += A(i, j) * A(i, j);
+    if (off <= 1e-30 * (total + off) || off == 0.0) break;
+    for (Eigen::Index p = 0; p < n - 1; ++p) {
+      for (Eigen::Index q = p + 1; q < n; ++q) {
+        const double apq = A(p, q);
+        if (apq == 0.0) continue;
+        const double theta = (A(q, q) - A(p, p)) / (2.0 * apq);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+        for (Eigen::Index k = 0; k < n; ++k) {  // A <- J^T A J, columns then rows
+          const double akp = A(k, p), akq = A(k, q);
+          A(k, p) = c * akp - s * akq;
+          A(k, q) = s * akp + c * akq;
+        }
+        for (Eigen::Index k = 0; k < n; ++k) {
+          const double apk = A(p, k), aqk = A(q, k);
+          A(p, k) = c * apk - s * aqk;
+          A(q, k) = s * apk + c * aqk;
+        }
+        for (Eigen::Index k = 0; k < n; ++k) {
+          const double vkp = V(k, p), vkq = V(k, q);
+          V(k, p) = c * vkp - s * vkq;
+          V(k, q) = s * vkp + c * vkq;
+        }
+      }
+    }
   }
-  if (sqrt_out) *sqrt_out = V * sq.asDiagonal() * V.transpose();
-  if (pinv_out) *pinv_out = V * inv.asDiagonal() * V.transpose();
-  if (rank_loss) *rank_loss = loss;
+  d = A.diagonal();
+}
+
+// out = V f(lambda) V^T for the symmetric PSD X (eigenvalues below rel * max
+// count as zero); f = sqrt (smooth basis) or 1/x (pseudo-inverse).
+// Returns true when some eigenvalue was dropped.
+bool psd_function(GeneralScratch& W, const Eigen::MatrixXd& X, double rel, bool sqrt_fn, Eigen::MatrixXd& out) {
+  W.A = X;
+  jacobi_eigen(W.A, W.V, W.d);
+  const double emax = W.d.size() ? std::max(W.d.maxCoeff(), 0.0) : 0.0;
+  const double thr = emax * rel;
+  bool loss = false;
+  for (Eigen::Index i = 0; i < W.d.size(); ++i) {
+    const bool pos = W.d(i) > thr && W.d(i) > 0.0;
+    loss = loss || !pos;
+    W.d(i) = pos ? (sqrt_fn ? std::sqrt(W.d(i)) : 1.0 / W.d(i)) : 0.0;
+  }
+  W.VD = W.V;
+  for (Eigen::Index c = 0; c < W.VD.cols(); ++c) W.VD.col(c) *= W.d(c);
+  out.noalias() = W.VD * W.V.transpose();
+  return loss;
 }
 
 void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, GeneralScratch& W, bool store_basis) {
-  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p;
+  using RowMap = Eigen::Map<const GeneralScratch::RowMat>;
+  using VecMap = Eigen::Map<const Eigen::VectorXd>;
+  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p, ke = W.ke, ki = k - ke;
   uint32_t status = 0;
-  W.alpha.resize(m);
   const double* al = B.alpha.data() + size_t(e) * m;
   for (int j = 0; j < m; ++j) {
     double v = al[j];
     if (!finite(v)) { v = 0.0; status |= kStatusAlphaNonFinite; }
     W.alpha(j) = std::clamp(v, -1.0, 1.0);
   }
-  W.Jq = Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.Jq.data() + size_t(e) * k * n, k, n);
-  if (mod.g_form == GForm::Diagonal) {
-    W.JG = W.Jq * Eigen::Map<const Eigen::VectorXd>(B.G.data() + size_t(e) * n, n).asDiagonal();
-  } else {
-    W.G = Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.G.data() + size_t(e) * n * m, n, m);
-    W.JG = W.Jq * W.G;
-  }
-  W.F = Eigen::VectorXd::Zero(k);
-  if (mod.has_drift) W.F += W.Jq * Eigen::Map<const Eigen::VectorXd>(B.f.data() + size_t(e) * n, n);
-  if (p > 0)
-    W.F += Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.Jx.data() + size_t(e) * k * p, k, p) *
-           Eigen::Map<const Eigen::VectorXd>(B.xdot.data() + size_t(e) * p, p);
+  const RowMap Jq(B.Jq.data() + size_t(e) * k * n, k, n);
+  if (mod.g_form == GForm::Diagonal)
+    W.JG.noalias() = Jq * VecMap(B.G.data() + size_t(e) * n, n).asDiagonal();
+  else
+    W.JG.noalias() = Jq * RowMap(B.G.data() + size_t(e) * n * m, n, m);
+  W.F.setZero();
+  if (mod.has_drift) W.F.noalias() += Jq * VecMap(B.f.data() + size_t(e) * n, n);
+  if (p > 0) W.F.noalias() += RowMap(B.Jx.data() + size_t(e) * k * p, k, p) * VecMap(B.xdot.data() + size_t(e) * p, p);
 
   const double* c = B.c.data() + size_t(e) * k;
   double* s_out = B.s.data() + size_t(e) * k;
-  W.r.resize(k);
-  W.rate.resize(k);
-  const int ke = mod.num_equality();
-  const int ki = k - ke;
-  W.JE.resize(ke, m);
-  W.rE.resize(ke);
-  // [I; A^-1 J_I] and [0; A^-1 r_I]: their QR gives I + J_I^T W J_I = R^T R
-  // and J_I^T W r_I = R^T z without forming the products (as in the fast path).
-  W.stack.setZero(m + ki, m);
-  W.stack.topRows(m).setIdentity();
-  W.rhs.setZero(m + ki);
+  // QR of [I, 0; A^-1 J_I, A^-1 r_I]: its R holds R with I + J_I^T W J_I =
+  // R^T R in the first m columns and z with J_I^T W r_I = R^T z in the last,
+  // without forming the products (as in the fast path).
+  W.stack.setZero();
+  W.stack.topLeftCorner(m, m).setIdentity();
   for (int i = 0, ie = 0, ii = 0; i < k; ++i) {
     if (mod.equality[i]) {
       s_out[i] = 0.0;
@@ -526,43 +573,47 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
     s_out[i] = s;
     W.rate(i) = slack_rate(mod.slack[i], s, mod.beta[i], mod.tol[i]);
     W.r(i) = W.F(i) + mod.K_c * (c[i] + s);
-    W.stack.row(m + ii) = W.JG.row(i) / W.rate(i);
-    W.rhs(m + ii++) = W.r(i) / W.rate(i);
+    W.stack.row(m + ii).head(m) = W.JG.row(i) / W.rate(i);
+    W.stack(m + ii++, m) = W.r(i) / W.rate(i);
   }
 
   double* a_out = B.a.data() + size_t(e) * m;
   double* us_out = B.slack_u.data() + size_t(e) * k;
-  const bool model_ok = W.stack.allFinite() && W.rhs.allFinite() && W.r.allFinite() && W.JE.allFinite();
+  const bool model_ok = W.stack.allFinite() && W.r.allFinite() && W.JE.allFinite();
   if (model_ok) {
     W.qr.compute(W.stack);
-    W.z = (W.qr.householderQ().transpose() * W.rhs).head(m);
-    const auto R = W.qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
-    W.Rinv = R.solve(Eigen::MatrixXd::Identity(m, m));
-    W.Minv = W.Rinv * W.Rinv.transpose();
-    W.b = -(W.Rinv * W.z);
-    const Eigen::VectorXd g = R.transpose() * W.z;  // J_I^T W r_I
+    W.z = W.qr.matrixQR().col(m).head(m);
+    W.R = W.qr.matrixQR().topLeftCorner(m, m).triangularView<Eigen::Upper>();
+    W.Rinv.setIdentity();
+    W.R.triangularView<Eigen::Upper>().solveInPlace(W.Rinv);
+    W.Minv.noalias() = W.Rinv * W.Rinv.transpose();
+    W.b.noalias() = -W.Rinv * W.z;
     if (ke > 0) {
       // Equality rows: the tangent space is restricted to null(J_E) in the
       // M-metric. S = J_E M^-1 J_E^T; dependent rows are solved in least squares.
-      W.S = W.JE * W.Minv * W.JE.transpose();
-      Eigen::MatrixXd Spinv;
-      bool loss = false;
-      psd_functions(W.eig, W.S, 1e-12, nullptr, &Spinv, &loss);
-      if (loss) status |= kStatusEqualityRankLoss;
-      const Eigen::MatrixXd MJ = W.Minv * W.JE.transpose();  // (m x ke)
-      W.Na = W.Minv - MJ * Spinv * MJ.transpose();
-      W.mu = Spinv * (W.JE * W.Minv * g - W.rE);
-      W.b = W.Minv * (W.JE.transpose() * W.mu - g);
+      W.g.noalias() = W.R.transpose() * W.z;  // J_I^T W r_I
+      W.MJ.noalias() = W.Minv * W.JE.transpose();
+      W.S.noalias() = W.JE * W.MJ;
+      if (psd_function(W, W.S, 1e-12, false, W.Spinv)) status |= kStatusEqualityRankLoss;
+      W.MJS.noalias() = W.MJ * W.Spinv;
+      W.Na = W.Minv;
+      W.Na.noalias() -= W.MJS * W.MJ.transpose();
+      W.Mg.noalias() = W.Minv * W.g;
+      W.JEMg.noalias() = W.JE * W.Mg;
+      W.JEMg -= W.rE;
+      W.mu.noalias() = W.Spinv * W.JEMg;
+      W.b.noalias() = W.MJ * W.mu;
+      W.b -= W.Mg;
     } else {
       W.Na = W.Minv;
     }
     if (mod.basis == BasisType::Smooth) {
       // Action block of the Procrustes basis: N_a^{1/2} (see docs/projector.md).
-      psd_functions(W.eig, W.Na, 1e-13, &W.T, nullptr, nullptr);
+      psd_function(W, W.Na, 1e-13, true, W.T);
     } else {
       W.T = W.Na;
     }
-    W.t = W.T * W.alpha;
+    W.t.noalias() = W.T * W.alpha;
     bool bias_out = false;
     const double lam = tangent_scale(W.b.data(), W.t.data(), m, &bias_out);
     if (bias_out) status |= kStatusBiasOutOfBounds;
@@ -576,11 +627,13 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
     if (ok) {
       for (int j = 0; j < m; ++j) a_out[j] = W.a(j);
       B.lambda[e] = lam;
-      if (store_basis) Eigen::Map<Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(B.Na.data() + size_t(e) * m * m, m, m) = W.T;
+      if (store_basis)
+        Eigen::Map<GeneralScratch::RowMat>(B.Na.data() + size_t(e) * m * m, m, m) = W.T;
       B.status[e] = status;
       return;
     }
   }
+  (void)ki;
   for (int j = 0; j < m; ++j) a_out[j] = 0.0;
   for (int i = 0; i < k; ++i) us_out[i] = 0.0;
   B.lambda[e] = 0.0;
@@ -614,6 +667,7 @@ void project_range(const ProjectorModel& mod, ProjectorBatch& B, int begin, int 
     for (int lo = begin; lo < end; lo += kLanes) fn(mod, B, lo, std::min(lo + kLanes, end), scratch, opt.store_basis);
   } else {
     thread_local GeneralScratch scratch;
+    scratch.setup(mod);
     for (int e = begin; e < end; ++e) project_general_one(mod, B, e, scratch, opt.store_basis);
   }
 }

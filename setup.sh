@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# One command on a fresh Debian machine: install what is missing (apt, when
+# root; otherwise print the exact apt line), configure, build, and run the
+# main job on its built-in default.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+PACKAGES=(build-essential cmake libeigen3-dev libtbb-dev libbox2d-dev nlohmann-json3-dev catch2 libcli11-dev)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  if [ "$(id -u)" -eq 0 ]; then
+    echo "setup: installing ${missing[*]}"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+  else
+    echo "setup: missing Debian packages. Run this, then ./setup.sh again:"
+    echo "  sudo apt-get install -y ${missing[*]}"
+    exit 1
+  fi
+fi
+
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j"$jobs"
+
+# The main job on its built-in default.
+./build/atacom demo --out runs/demo
