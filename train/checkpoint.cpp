@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -11,28 +10,13 @@
 #include <stdexcept>
 
 #include "atacom/binary_io.hpp"
+#include "atacom/fs_util.hpp"
 
 namespace atacom {
 
 namespace {
 
 constexpr char kMagic[8] = {'A', 'T', 'A', 'C', 'K', 'P', 'T', '\0'};
-
-[[noreturn]] void sys_error(const std::string& what, const std::string& path) {
-  throw std::runtime_error(what + " '" + path + "': " + std::strerror(errno));
-}
-
-void write_all(int fd, const char* data, size_t n, const std::string& path) {
-  while (n > 0) {
-    const ssize_t w = ::write(fd, data, n);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      sys_error("cannot write", path);
-    }
-    data += w;
-    n -= size_t(w);
-  }
-}
 
 void fsync_dir(const std::string& path) {
   const std::string dir = std::filesystem::path(path).parent_path().string();
@@ -43,17 +27,6 @@ void fsync_dir(const std::string& path) {
 }
 
 }  // namespace
-
-void write_file_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) sys_error("cannot create", tmp);
-  write_all(fd, text.data(), text.size(), tmp);
-  if (::fsync(fd) != 0) { ::close(fd); sys_error("cannot fsync", tmp); }
-  if (::close(fd) != 0) sys_error("cannot close", tmp);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) sys_error("cannot rename onto", path);
-  fsync_dir(path);
-}
 
 void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt) {
   std::ostringstream s;
@@ -68,6 +41,7 @@ void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt) {
   const uint64_t h = bin::fnv1a(bytes.data(), bytes.size());
   bytes.append(reinterpret_cast<const char*>(&h), sizeof(h));
   write_file_atomic(path, bytes);
+  fsync_dir(path);  // make the rename itself durable
 }
 
 Checkpoint read_checkpoint(const std::string& path) {

@@ -15,7 +15,9 @@
 #include "atacom/checkpoint.hpp"
 #include "atacom/config_json.hpp"
 #include "atacom/env_registry.hpp"
+#include "atacom/fs_util.hpp"
 #include "atacom/replay_buffer.hpp"
+#include "atacom/svg.hpp"
 
 namespace atacom {
 
@@ -87,76 +89,42 @@ std::vector<std::string> progress_columns(const std::vector<std::string>& info_n
 }
 
 // ---------------------------------------------------------------- SVG
-namespace {
-std::string num(double v) {
-  char b[32];
-  std::snprintf(b, sizeof(b), "%.6g", v);
-  return b;
-}
-std::string esc(const std::string& s) {
-  std::string o;
-  for (char ch : s) {
-    if (ch == '<') o += "&lt;";
-    else if (ch == '>') o += "&gt;";
-    else if (ch == '&') o += "&amp;";
-    else o += ch;
-  }
-  return o;
-}
-}  // namespace
-
 std::string learning_curve_svg(const std::string& title, const std::vector<double>& steps,
                                const std::vector<double>& mean, const std::vector<double>& sd) {
-  const double W = 640, H = 400, L = 70, R = 20, T = 40, Bm = 50;
-  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  double x1 = 1, y0 = 0, y1 = 1;
   bool any = false;
   for (size_t i = 0; i < steps.size(); ++i) {
     if (!std::isfinite(mean[i])) continue;
     const double s = std::isfinite(sd[i]) ? sd[i] : 0.0;
-    if (!any) { x0 = x1 = steps[i]; y0 = mean[i] - s; y1 = mean[i] + s; any = true; }
-    x0 = std::min(x0, steps[i]); x1 = std::max(x1, steps[i]);
-    y0 = std::min(y0, mean[i] - s); y1 = std::max(y1, mean[i] + s);
+    if (!any) { y0 = mean[i] - s; y1 = mean[i] + s; any = true; }
+    x1 = std::max(x1, steps[i]);
+    y0 = std::min(y0, mean[i] - s);
+    y1 = std::max(y1, mean[i] + s);
   }
-  x0 = 0;
-  if (x1 <= x0) x1 = x0 + 1;
   if (y1 - y0 < 1e-9) { y0 -= 1; y1 += 1; }
-  const double pad = 0.05 * (y1 - y0);
-  y0 -= pad; y1 += pad;
-  auto px = [&](double x) { return L + (x - x0) / (x1 - x0) * (W - L - R); };
-  auto py = [&](double y) { return T + (y1 - y) / (y1 - y0) * (H - T - Bm); };
-  std::ostringstream o;
-  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\" viewBox=\"0 0 " << W
-    << " " << H << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
-  o << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  o << "<text x=\"" << W / 2 << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" << esc(title) << "</text>\n";
-  for (int k = 0; k <= 5; ++k) {  // grid and tick labels
-    const double xv = x0 + (x1 - x0) * k / 5, yv = y0 + (y1 - y0) * k / 5;
-    o << "<line x1=\"" << num(px(xv)) << "\" y1=\"" << T << "\" x2=\"" << num(px(xv)) << "\" y2=\"" << H - Bm
-      << "\" stroke=\"#ddd\"/>\n";
-    o << "<line x1=\"" << L << "\" y1=\"" << num(py(yv)) << "\" x2=\"" << W - R << "\" y2=\"" << num(py(yv))
-      << "\" stroke=\"#ddd\"/>\n";
-    o << "<text x=\"" << num(px(xv)) << "\" y=\"" << H - Bm + 16 << "\" text-anchor=\"middle\">" << num(xv) << "</text>\n";
-    o << "<text x=\"" << L - 6 << "\" y=\"" << num(py(yv) + 4) << "\" text-anchor=\"end\">" << num(yv) << "</text>\n";
-  }
-  o << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << W - L - R << "\" height=\"" << H - T - Bm
-    << "\" fill=\"none\" stroke=\"#333\"/>\n";
-  o << "<text x=\"" << (L + W - R) / 2 << "\" y=\"" << H - 12 << "\" text-anchor=\"middle\">env steps</text>\n";
-  o << "<text x=\"16\" y=\"" << (T + H - Bm) / 2 << "\" text-anchor=\"middle\" transform=\"rotate(-90 16 "
-    << (T + H - Bm) / 2 << ")\">eval return (mean &#177; std)</text>\n";
-  std::string band_up, band_down, line;
+  // round the y range out to ticks at multiples of 1, 2 or 5 x 10^k
+  const double raw = (y1 - y0) / 5, mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double step = raw <= mag ? mag : raw <= 2 * mag ? 2 * mag : raw <= 5 * mag ? 5 * mag : 10 * mag;
+  const double lo = std::floor(y0 / step) * step;
+  const int yticks = std::max(1, static_cast<int>(std::ceil((y1 - lo) / step - 1e-9)));
+  SvgCanvas svg(640, 400, 0.0, x1, lo, lo + yticks * step, 64);
+  svg.axes("env steps", "eval return (mean, mean +- std)", 5, yticks);
+  svg.label(320, 24, title, 15, "middle");
+  std::vector<std::pair<double, double>> line, up, down;
   for (size_t i = 0; i < steps.size(); ++i) {
     if (!std::isfinite(mean[i])) continue;
     const double s = std::isfinite(sd[i]) ? sd[i] : 0.0;
-    band_up += num(px(steps[i])) + "," + num(py(mean[i] + s)) + " ";
-    band_down = num(px(steps[i])) + "," + num(py(mean[i] - s)) + " " + band_down;
-    line += num(px(steps[i])) + "," + num(py(mean[i])) + " ";
+    line.emplace_back(steps[i], mean[i]);
+    up.emplace_back(steps[i], mean[i] + s);
+    down.emplace_back(steps[i], mean[i] - s);
   }
   if (!line.empty()) {
-    o << "<polygon points=\"" << band_up << band_down << "\" fill=\"#1f77b4\" fill-opacity=\"0.2\" stroke=\"none\"/>\n";
-    o << "<polyline points=\"" << line << "\" fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"2\"/>\n";
+    svg.polyline(up, "#1f77b4", 1.0, 0.35);
+    svg.polyline(down, "#1f77b4", 1.0, 0.35);
+    svg.polyline(line, "#1f77b4", 2.0);
+    for (const auto& [x, y] : line) svg.circle(x, y, 0.006 * x1, "#1f77b4");  // one dot per evaluation
   }
-  o << "</svg>\n";
-  return o.str();
+  return svg.str();
 }
 
 // ---------------------------------------------------------------- the run

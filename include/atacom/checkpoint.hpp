@@ -27,8 +27,4 @@ struct Checkpoint {
 void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt);
 Checkpoint read_checkpoint(const std::string& path);
 
-// Write `text` to path atomically (temp file, fsync, rename): used for the
-// small JSON/CSV/SVG outputs so a reader never sees half a file.
-void write_file_atomic(const std::string& path, const std::string& text);
-
 }  // namespace atacom
