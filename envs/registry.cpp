@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "atacom/nav_env.hpp"
 #include "atacom/pendulum.hpp"
 
 namespace atacom {
@@ -9,6 +10,8 @@ namespace atacom {
 // Each env adds one line here (a function declared next to its class).
 const std::vector<EnvEntry>& env_entries() {
   static const std::vector<EnvEntry> entries = {
+      {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
+       &nav_default_config_json, &make_nav_env},
       pendulum_env_entry(),
   };
   return entries;

@@ -134,39 +134,45 @@ struct LaneScratch {
   }
 };
 
+// GCC 12 flags its own _mm512_undefined_pd inside the unpack intrinsics.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#if defined(__AVX512F__)
+static_assert(kLanes == 8);
+// In-register 8 x 8 transpose of doubles: pairs, then 128-bit blocks, then
+// 256-bit halves (24 shuffles).
+inline void transpose8x8(__m512d r[8]) {
+  const __m512d t0 = _mm512_unpacklo_pd(r[0], r[1]), t1 = _mm512_unpackhi_pd(r[0], r[1]);
+  const __m512d t2 = _mm512_unpacklo_pd(r[2], r[3]), t3 = _mm512_unpackhi_pd(r[2], r[3]);
+  const __m512d t4 = _mm512_unpacklo_pd(r[4], r[5]), t5 = _mm512_unpackhi_pd(r[4], r[5]);
+  const __m512d t6 = _mm512_unpacklo_pd(r[6], r[7]), t7 = _mm512_unpackhi_pd(r[6], r[7]);
+  const __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
+  const __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
+  const __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
+  const __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
+  r[0] = _mm512_shuffle_f64x2(u0, u4, 0x88);
+  r[1] = _mm512_shuffle_f64x2(u1, u5, 0x88);
+  r[2] = _mm512_shuffle_f64x2(u2, u6, 0x88);
+  r[3] = _mm512_shuffle_f64x2(u3, u7, 0x88);
+  r[4] = _mm512_shuffle_f64x2(u0, u4, 0xDD);
+  r[5] = _mm512_shuffle_f64x2(u1, u5, 0xDD);
+  r[6] = _mm512_shuffle_f64x2(u2, u6, 0xDD);
+  r[7] = _mm512_shuffle_f64x2(u3, u7, 0xDD);
+}
+#endif
+
 // Copy `count` consecutive doubles of each lane's source into lane vectors
 // (dst[idx][l] = src[l][idx]). With AVX-512 whole 8 x 8 tiles are
 // transposed in registers (8 loads, 24 shuffles, 8 stores instead of 64
 // scalar moves each way); the scalar loop handles the rest.
-// GCC 12 flags its own _mm512_undefined_pd inside the unpack intrinsics.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wuninitialized"
 void gather_lanes(const double* const src[kLanes], int count, V* dst) {
   int idx = 0;
 #if defined(__AVX512F__)
-  static_assert(kLanes == 8);
   for (; idx + 8 <= count; idx += 8) {
-    __m512d r0 = _mm512_loadu_pd(src[0] + idx), r1 = _mm512_loadu_pd(src[1] + idx);
-    __m512d r2 = _mm512_loadu_pd(src[2] + idx), r3 = _mm512_loadu_pd(src[3] + idx);
-    __m512d r4 = _mm512_loadu_pd(src[4] + idx), r5 = _mm512_loadu_pd(src[5] + idx);
-    __m512d r6 = _mm512_loadu_pd(src[6] + idx), r7 = _mm512_loadu_pd(src[7] + idx);
-    // pairs, then 128-bit blocks, then 256-bit halves
-    __m512d t0 = _mm512_unpacklo_pd(r0, r1), t1 = _mm512_unpackhi_pd(r0, r1);
-    __m512d t2 = _mm512_unpacklo_pd(r2, r3), t3 = _mm512_unpackhi_pd(r2, r3);
-    __m512d t4 = _mm512_unpacklo_pd(r4, r5), t5 = _mm512_unpackhi_pd(r4, r5);
-    __m512d t6 = _mm512_unpacklo_pd(r6, r7), t7 = _mm512_unpackhi_pd(r6, r7);
-    __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
-    __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
-    __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
-    __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
-    dst[idx + 0] = _mm512_shuffle_f64x2(u0, u4, 0x88);
-    dst[idx + 1] = _mm512_shuffle_f64x2(u1, u5, 0x88);
-    dst[idx + 2] = _mm512_shuffle_f64x2(u2, u6, 0x88);
-    dst[idx + 3] = _mm512_shuffle_f64x2(u3, u7, 0x88);
-    dst[idx + 4] = _mm512_shuffle_f64x2(u0, u4, 0xDD);
-    dst[idx + 5] = _mm512_shuffle_f64x2(u1, u5, 0xDD);
-    dst[idx + 6] = _mm512_shuffle_f64x2(u2, u6, 0xDD);
-    dst[idx + 7] = _mm512_shuffle_f64x2(u3, u7, 0xDD);
+    __m512d r[8];
+    for (int l = 0; l < 8; ++l) r[l] = _mm512_loadu_pd(src[l] + idx);
+    transpose8x8(r);
+    for (int l = 0; l < 8; ++l) dst[idx + l] = r[l];
   }
 #endif
   for (; idx < count; ++idx)
@@ -179,24 +185,10 @@ void scatter_lanes(const V* src, int count, double* const dst[kLanes]) {
   int idx = 0;
 #if defined(__AVX512F__)
   for (; idx + 8 <= count; idx += 8) {
-    const __m512d r0 = src[idx + 0], r1 = src[idx + 1], r2 = src[idx + 2], r3 = src[idx + 3];
-    const __m512d r4 = src[idx + 4], r5 = src[idx + 5], r6 = src[idx + 6], r7 = src[idx + 7];
-    __m512d t0 = _mm512_unpacklo_pd(r0, r1), t1 = _mm512_unpackhi_pd(r0, r1);
-    __m512d t2 = _mm512_unpacklo_pd(r2, r3), t3 = _mm512_unpackhi_pd(r2, r3);
-    __m512d t4 = _mm512_unpacklo_pd(r4, r5), t5 = _mm512_unpackhi_pd(r4, r5);
-    __m512d t6 = _mm512_unpacklo_pd(r6, r7), t7 = _mm512_unpackhi_pd(r6, r7);
-    __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
-    __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
-    __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
-    __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
-    _mm512_storeu_pd(dst[0] + idx, _mm512_shuffle_f64x2(u0, u4, 0x88));
-    _mm512_storeu_pd(dst[1] + idx, _mm512_shuffle_f64x2(u1, u5, 0x88));
-    _mm512_storeu_pd(dst[2] + idx, _mm512_shuffle_f64x2(u2, u6, 0x88));
-    _mm512_storeu_pd(dst[3] + idx, _mm512_shuffle_f64x2(u3, u7, 0x88));
-    _mm512_storeu_pd(dst[4] + idx, _mm512_shuffle_f64x2(u0, u4, 0xDD));
-    _mm512_storeu_pd(dst[5] + idx, _mm512_shuffle_f64x2(u1, u5, 0xDD));
-    _mm512_storeu_pd(dst[6] + idx, _mm512_shuffle_f64x2(u2, u6, 0xDD));
-    _mm512_storeu_pd(dst[7] + idx, _mm512_shuffle_f64x2(u3, u7, 0xDD));
+    __m512d r[8];
+    for (int l = 0; l < 8; ++l) r[l] = src[idx + l];
+    transpose8x8(r);
+    for (int l = 0; l < 8; ++l) _mm512_storeu_pd(dst[l] + idx, r[l]);
   }
 #endif
   for (; idx < count; ++idx)

@@ -58,6 +58,24 @@ struct Scenario {
   virtual Vec sample_raw(Rng& rng) const = 0;
 };
 
+// Rows for a wheeled robot whose look-ahead point pd (Jacobian Jd, 2 x n)
+// must keep `reach` from the walls of [-half_w, half_w] x [-half_h, half_h]
+// and from the moving disc: 4 wall rows then 1 disc row, from row `first`.
+inline void lookahead_rows(const Eigen::Vector2d& pd, const Mat& Jd, double reach, double half_w, double half_h,
+                           const MovingDisc& obs, double t, Eval& e, int first) {
+  e.c(first + 0) = pd.x() + reach - half_w;  e.Jq.row(first + 0) = Jd.row(0);
+  e.c(first + 1) = -half_w - pd.x() + reach; e.Jq.row(first + 1) = -Jd.row(0);
+  e.c(first + 2) = pd.y() + reach - half_h;  e.Jq.row(first + 2) = Jd.row(1);
+  e.c(first + 3) = -half_h - pd.y() + reach; e.Jq.row(first + 3) = -Jd.row(1);
+  const Eigen::Vector2d diff = pd - obs.pos(t);
+  const double dist = diff.norm();
+  const Eigen::Vector2d u = diff / dist;
+  e.c(first + 4) = obs.radius + reach - dist;
+  e.Jq.row(first + 4) = -u.transpose() * Jd;
+  e.Jx.row(first + 4) = u.transpose();
+  e.xdot = obs.vel(t);
+}
+
 // ---- A: planar 3-link arm, velocity control -------------------------------
 // Rows: 6 joint limits, 3 floor rows (elbow, wrist, tip above y = -0.3),
 // 2 obstacle rows (wrist, tip clear of the moving disc by 0.05 m).
@@ -159,23 +177,12 @@ struct DiffDriveScenario : Scenario {
     e.G = Gr;
     const double c = std::cos(q(2)), s = std::sin(q(2));
     const Eigen::Vector2d pd(q(0) + d * c, q(1) + d * s);
-    Eigen::Matrix<double, 2, 3> Jd;
+    Mat Jd(2, 3);
     Jd << 1, 0, -d * s, 0, 1, d * c;
-    const double reach = R + d + margin;
     e.c.resize(5);
     e.Jq = Mat::Zero(5, 3);
     e.Jx = Mat::Zero(5, 2);
-    e.c(0) = pd.x() + reach - half_w; e.Jq.row(0) = Jd.row(0);
-    e.c(1) = -half_w - pd.x() + reach; e.Jq.row(1) = -Jd.row(0);
-    e.c(2) = pd.y() + reach - half_h; e.Jq.row(2) = Jd.row(1);
-    e.c(3) = -half_h - pd.y() + reach; e.Jq.row(3) = -Jd.row(1);
-    const Eigen::Vector2d diff = pd - obs.pos(t);
-    const double dist = diff.norm();
-    const Eigen::Vector2d u = diff / dist;
-    e.c(4) = obs.radius + reach - dist;
-    e.Jq.row(4) = -u.transpose() * Jd;
-    e.Jx.row(4) = u.transpose();
-    e.xdot = obs.vel(t);
+    lookahead_rows(pd, Jd, R + d + margin, half_w, half_h, obs, t, e, 0);
     return e;
   }
   Vec sample_raw(Rng& rng) const override {
@@ -212,25 +219,14 @@ struct BicycleScenario : Scenario {
     e.G = Gr;
     const double c = std::cos(q(2)), s = std::sin(q(2));
     const Eigen::Vector2d pd(q(0) + d * c, q(1) + d * s);
-    Eigen::Matrix<double, 2, 4> Jd;
+    Mat Jd(2, 4);
     Jd << 1, 0, -d * s, 0, 0, 1, d * c, 0;
-    const double reach = R + d + margin;
     e.c.resize(7);
     e.Jq = Mat::Zero(7, 4);
     e.Jx = Mat::Zero(7, 2);
     e.c(0) = q(3) - steer_max; e.Jq(0, 3) = 1;
     e.c(1) = -steer_max - q(3); e.Jq(1, 3) = -1;
-    e.c(2) = pd.x() + reach - half_w; e.Jq.row(2) = Jd.row(0);
-    e.c(3) = -half_w - pd.x() + reach; e.Jq.row(3) = -Jd.row(0);
-    e.c(4) = pd.y() + reach - half_h; e.Jq.row(4) = Jd.row(1);
-    e.c(5) = -half_h - pd.y() + reach; e.Jq.row(5) = -Jd.row(1);
-    const Eigen::Vector2d diff = pd - obs.pos(t);
-    const double dist = diff.norm();
-    const Eigen::Vector2d u = diff / dist;
-    e.c(6) = obs.radius + reach - dist;
-    e.Jq.row(6) = -u.transpose() * Jd;
-    e.Jx.row(6) = u.transpose();
-    e.xdot = obs.vel(t);
+    lookahead_rows(pd, Jd, R + d + margin, half_w, half_h, obs, t, e, 2);
     return e;
   }
   Vec sample_raw(Rng& rng) const override {

@@ -36,6 +36,10 @@ class SafeEnv final : public BatchEnv {
   void step(const double* alpha) override;
   void save_state(std::ostream& out) const override { inner_->save_state(out); }
   void load_state(std::istream& in) override;
+  // Profiling is the inner env's (the projection is not split out).
+  std::vector<std::string> profile_sections() const override { return inner_->profile_sections(); }
+  void set_profiling(bool on) override { inner_->set_profiling(on); }
+  std::vector<double> profile_seconds() const override { return inner_->profile_seconds(); }
 
   const ControlAffineEnv& inner() const { return *inner_; }
   ControlAffineEnv& inner() { return *inner_; }
