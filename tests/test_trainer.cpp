@@ -275,3 +275,26 @@ TEST_CASE("trainer: atacom train command line", "[trainer]") {
   fs::remove(cfgp);
   fs::remove(cfgp + ".bad");
 }
+
+TEST_CASE("trainer: atacom-sac through SafeEnv on nav, resumed bitwise", "[trainer]") {
+  // The generic path end to end: an env with constraints, wrapped in ATACOM
+  // by the registry, its info columns in progress.csv and summary.json.
+  json cfg = small_run(800);
+  cfg["train"]["env"] = "nav";
+  cfg["train"]["algo"] = "atacom-sac";
+  cfg["train"]["num_envs"] = 4;
+  cfg["train"]["eval_every"] = 400;
+  cfg["train"]["eval_episodes"] = 2;
+  const std::string full = tmp_dir("nav_full"), part = tmp_dir("nav_part");
+  const auto u = train(cfg, full);
+  train(cfg, part, false, 400);
+  const auto r = train(cfg, part, true);
+  REQUIRE(r.agent_hash == u.agent_hash);
+  REQUIRE(progress_without_wall(part) == progress_without_wall(full));
+  const json sum = json::parse(slurp(full + "/summary.json"));
+  REQUIRE(sum["algo"] == "atacom-sac");
+  REQUIRE(sum.contains("max_constraint"));
+  REQUIRE(sum.contains("train_collision"));
+  fs::remove_all(full);
+  fs::remove_all(part);
+}
