@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "atacom/nav_env.hpp"
+#include "atacom/pendulum.hpp"
 
 namespace atacom {
 
@@ -11,6 +12,7 @@ const std::vector<EnvEntry>& env_entries() {
   static const std::vector<EnvEntry> entries = {
       {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
        &nav_default_config_json, &make_nav_env},
+      pendulum_env_entry(),
   };
   return entries;
 }
