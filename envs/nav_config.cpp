@@ -63,6 +63,13 @@ void validate(const NavConfig& c) {
           "constraints.wall_margin must be >= 0");
   require(std::isfinite(c.constraints.fetch_margin) && c.constraints.fetch_margin >= 0.0,
           "constraints.fetch_margin must be >= 0");
+  require(std::isfinite(c.constraints.wall_lookahead) && c.constraints.wall_lookahead >= 0.0 &&
+              std::isfinite(c.constraints.fetch_lookahead) && c.constraints.fetch_lookahead >= 0.0,
+          "constraints.wall_lookahead and constraints.fetch_lookahead must be >= 0");
+  require(std::isfinite(c.constraints.fetch_sweep) && c.constraints.fetch_sweep >= 0.0,
+          "constraints.fetch_sweep must be >= 0");
+  require(std::isfinite(c.constraints.wall_buffer) && c.constraints.wall_buffer >= 0.0,
+          "constraints.wall_buffer must be >= 0");
   parse_slack_type(c.constraints.slack);
   parse_basis_type(c.constraints.basis);
   require(pos(c.constraints.wall_beta) && pos(c.constraints.fetch_beta), "constraints betas must be > 0");
@@ -99,6 +106,10 @@ void to_json(nlohmann::json& j, const NavConfig& c) {
       {"constraints",
        {{"wall_margin", c.constraints.wall_margin},
         {"fetch_margin", c.constraints.fetch_margin},
+        {"wall_lookahead", c.constraints.wall_lookahead},
+        {"fetch_lookahead", c.constraints.fetch_lookahead},
+        {"fetch_sweep", c.constraints.fetch_sweep},
+        {"wall_buffer", c.constraints.wall_buffer},
         {"slack", c.constraints.slack},
         {"basis", c.constraints.basis},
         {"wall_beta", c.constraints.wall_beta},
@@ -156,6 +167,10 @@ void from_json(const nlohmann::json& j, NavConfig& out) {
     Reader s(r.at("constraints"), r.path("constraints"));
     c.constraints.wall_margin = s.number("wall_margin");
     c.constraints.fetch_margin = s.number("fetch_margin");
+    c.constraints.wall_lookahead = s.number("wall_lookahead");
+    c.constraints.fetch_lookahead = s.number("fetch_lookahead");
+    c.constraints.fetch_sweep = s.number("fetch_sweep");
+    c.constraints.wall_buffer = s.number("wall_buffer");
     c.constraints.slack = s.string("slack");
     c.constraints.basis = s.string("basis");
     c.constraints.wall_beta = s.number("wall_beta");
@@ -190,6 +205,10 @@ NavConstraintGeometry nav_constraint_geometry(const NavConfig& c) {
   g.fetch_radius = c.fetch.radius;
   g.wall_margin = c.constraints.wall_margin;
   g.fetch_margin = c.constraints.fetch_margin;
+  g.wall_lookahead = c.constraints.wall_lookahead;
+  g.fetch_lookahead = c.constraints.fetch_lookahead;
+  g.fetch_sweep = c.constraints.fetch_sweep;
+  g.wall_buffer = c.constraints.wall_buffer;
   return g;
 }
 

@@ -112,6 +112,7 @@ NavEnv::NavEnv(const NavConfig& config, int num_envs) : cfg_(config) {
   validate(cfg_);
   if (num_envs < 1) throw std::invalid_argument("NavEnv: number of envs must be >= 1");
   geom_ = nav_constraint_geometry(cfg_);
+  task_geom_ = nav_task_geometry(geom_);
   sys_ = nav_tiago_system(cfg_);
 
   spec_.name = "nav";
@@ -336,9 +337,9 @@ void NavEnv::reset(const uint8_t* mask) {
       std::copy_n(o, od, &buffers_.final_obs[od * i]);
       buffers_.reward[i] = 0.0f;
       buffers_.terminated[i] = buffers_.truncated[i] = 0;
-      double c[kNavConstraints], jq[15], jx[10];
-      const double xf[2] = {st_.fetch[3 * i], st_.fetch[3 * i + 1]};
-      nav_constraints(geom_, &st_.tiago[3 * i], xf, c, jq, jx);
+      double c[kNavConstraints], jq[3 * kNavConstraints], jx[kNavFetchState * kNavConstraints];
+      const double xf[kNavFetchState] = {st_.fetch[3 * i], st_.fetch[3 * i + 1], st_.fetch[3 * i + 2]};
+      nav_constraints(task_geom_, &st_.tiago[3 * i], xf, c, jq, jx);
       double worst = 0.0;
       for (size_t r = 0; r < k; ++r) { buffers_.constraints[k * i + r] = c[r]; worst = std::max(worst, c[r]); }
       buffers_.cost[i] = static_cast<float>(worst);
@@ -464,9 +465,10 @@ void NavEnv::step_block(const double* actions, int lo, int hi, int block_index) 
     st_.t[i] += 1;
     st_.ret[i] += r;
 
-    double c[kNavConstraints], jq[15], jx[10];
-    const double xf[2] = {fp[0], fp[1]};
-    nav_constraints(geom_, tp, xf, c, jq, jx);
+    // The task's rows (docs/envs_nav.md): ATACOM enforces stricter ones.
+    double c[kNavConstraints], jq[3 * kNavConstraints], jx[kNavFetchState * kNavConstraints];
+    const double xf[kNavFetchState] = {fp[0], fp[1], fp[2]};
+    nav_constraints(task_geom_, tp, xf, c, jq, jx);
     double worst = 0.0;
     for (size_t j = 0; j < k; ++j) { buffers_.constraints[k * i + j] = c[j]; worst = std::max(worst, c[j]); }
     buffers_.cost[i] = static_cast<float>(worst);

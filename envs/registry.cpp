@@ -4,6 +4,7 @@
 
 #include "atacom/arm_env.hpp"
 #include "atacom/nav_env.hpp"
+#include "atacom/pendulum.hpp"
 
 namespace atacom {
 
@@ -14,6 +15,7 @@ const std::vector<EnvEntry>& env_entries() {
       {"shelf", "ShelfEnvSim: TIAGo++ arm reaching into a shelf (34 constraints)", true, shelf_env_default_config, make_shelf_env},
       {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
        &nav_default_config_json, &make_nav_env},
+      pendulum_env_entry(),
   };
   return entries;
 }

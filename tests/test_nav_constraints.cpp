@@ -13,9 +13,9 @@
 using namespace atacom;
 
 TEST_CASE("nav constraints: values at known poses", "[nav_constraints]") {
-  const NavConstraintGeometry g;
-  double c[5], Jq[15], Jx[10];
-  const double q[3] = {3.0, -1.0, 0.3}, xf[2] = {3.0, 0.0};
+  const NavConstraintGeometry g;  // the task's rows
+  double c[5], Jq[15], Jx[15];
+  const double q[3] = {3.0, -1.0, 0.3}, xf[3] = {3.0, 0.0, 0.0};
   nav_constraints(g, q, xf, c, Jq, Jx);
   REQUIRE(c[0] == Approx(0.0).margin(1e-15));   // x = 3.5 - 0.4 - 0.1
   REQUIRE(c[1] == Approx(-3.0));                // y = -1 vs 2.0
@@ -25,37 +25,95 @@ TEST_CASE("nav constraints: values at known poses", "[nav_constraints]") {
   // Clearance gradient: TIAGo is below Fetch, moving it further down helps.
   REQUIRE(Jq[12] == Approx(0.0).margin(1e-15));
   REQUIRE(Jq[13] == Approx(1.0));
-  REQUIRE(Jx[9] == Approx(-1.0));
+  REQUIRE(Jx[13] == Approx(-1.0));
+  REQUIRE(Jx[14] == 0.0);  // no sweep: Fetch's heading does not matter
+  REQUIRE(Jq[2] == 0.0);   // no look-ahead: theta does not matter
+  REQUIRE(Jq[14] == 0.0);
+}
+
+TEST_CASE("nav constraints: ATACOM's rows at known poses and never below the task's rows", "[nav_constraints]") {
+  NavConstraintGeometry g;
+  g.wall_lookahead = 0.1;
+  g.wall_buffer = 0.02;
+  g.fetch_lookahead = 0.2;
+  g.fetch_sweep = 0.7;
+  double c[5], Jq[15], Jx[15];
+  // TIAGo facing +x at x = 2.5; Fetch at (0.5, 0) facing +x: the segment
+  // ends at x = 1.2, the look-ahead point is at 2.7.
+  const double q[3] = {2.5, 0.0, 0.0}, xf[3] = {0.5, 0.0, 0.0};
+  nav_constraints(g, q, xf, c, Jq, Jx);
+  REQUIRE(c[0] == Approx(2.5 + 0.2 - (3.5 - 0.4 - 0.1 - 0.02)));  // x + d_W (1 + cos 0)
+  REQUIRE(c[2] == Approx(-2.5 - (3.5 - 0.4 - 0.1 - 0.02)));       // facing away: exact plus buffer
+  REQUIRE(c[1] == Approx(0.1 - (2.5 - 0.4 - 0.1 - 0.02)));        // sideways: d_W
+  REQUIRE(c[4] == Approx(0.4 + 0.2 + 0.3 + 0.1 - (2.7 - 1.2)));
+  REQUIRE(Jq[1 * 3 + 2] == Approx(0.1));  // turning towards +y raises the +y row
+  REQUIRE(Jx[4 * 3 + 0] == Approx(1.0));  // segment end moves with Fetch
+  REQUIRE(Jx[4 * 3 + 2] == Approx(0.0).margin(1e-15));
+  // Random states: each of ATACOM's rows is >= the task's row.
+  const NavConstraintGeometry task = nav_task_geometry(g);
+  Rng rng(12, 0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double qq[3] = {rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0), rng.uniform(-M_PI, M_PI)};
+    const double ff[3] = {rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0), rng.uniform(-M_PI, M_PI)};
+    double ct[5];
+    nav_constraints(g, qq, ff, c, Jq, Jx);
+    nav_constraints(task, qq, ff, ct, Jq, Jx);
+    for (int r = 0; r < 5; ++r) REQUIRE(c[r] >= ct[r] - 1e-12);
+  }
 }
 
 TEST_CASE("nav constraints: J_q and J_x match central finite differences", "[nav_constraints]") {
-  const NavConstraintGeometry g;
+  // The task's rows, ATACOM's default rows, and a larger look-ahead/sweep.
+  NavConstraintGeometry big;
+  big.wall_lookahead = 0.4;
+  big.wall_buffer = 0.05;
+  big.fetch_lookahead = 0.5;
+  big.fetch_sweep = 1.5;
+  const NavConstraintGeometry geoms[3] = {NavConstraintGeometry{}, nav_constraint_geometry(default_nav_config()),
+                                          big};
   Rng rng(11, 0);
   const double h = 1e-6;
-  for (int trial = 0; trial < 1000; ++trial) {
-    const double q[3] = {rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0), rng.uniform(-M_PI, M_PI)};
-    double xf[2] = {rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0)};
-    if (std::hypot(q[0] - xf[0], q[1] - xf[1]) < 0.05) xf[0] += 0.5;  // FD needs |p_T - p_F| >> h
-    double c[5], Jq[15], Jx[10], Fq[15], Fx[10];
-    nav_constraints(g, q, xf, c, Jq, Jx);
-    nav_constraints_fd(g, q, xf, h, Fq, Fx);
-    for (int i = 0; i < 15; ++i) REQUIRE(Jq[i] == Approx(Fq[i]).margin(1e-6));
-    for (int i = 0; i < 10; ++i) REQUIRE(Jx[i] == Approx(Fx[i]).margin(1e-6));
+  int on_segment = 0;
+  for (const NavConstraintGeometry& g : geoms) {
+    for (int trial = 0; trial < 1000; ++trial) {
+      const double q[3] = {rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0), rng.uniform(-M_PI, M_PI)};
+      double xf[3] = {rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0), rng.uniform(-M_PI, M_PI)};
+      double c[5], Jq[15], Jx[15], Fq[15], Fx[15];
+      nav_constraints(g, q, xf, c, Jq, Jx);
+      // FD needs the look-ahead point well off the swept segment.
+      if (g.tiago_radius + g.fetch_lookahead + g.fetch_radius + g.fetch_margin - c[4] < 0.05) {
+        xf[0] += 1.0;
+        nav_constraints(g, q, xf, c, Jq, Jx);
+      }
+      const double sseg = Jx[14];  // nonzero when the closest point is inside the segment or at its end
+      on_segment += sseg != 0.0;
+      nav_constraints_fd(g, q, xf, h, Fq, Fx);
+      for (int i = 0; i < 15; ++i) REQUIRE(Jq[i] == Approx(Fq[i]).margin(1e-6));
+      for (int i = 0; i < 15; ++i) REQUIRE(Jx[i] == Approx(Fx[i]).margin(1e-6));
+    }
   }
+  REQUIRE(on_segment > 200);  // the sweep's heading entry was exercised
 }
 
 TEST_CASE("nav constraints: coincident centres give a finite unit gradient", "[nav_constraints]") {
   const NavConstraintGeometry g;
-  double c[5], Jq[15], Jx[10];
-  const double q[3] = {1.0, 1.0, 0.0}, xf[2] = {1.0, 1.0};
+  double c[5], Jq[15], Jx[15];
+  const double q[3] = {1.0, 1.0, 0.0}, xf[3] = {1.0, 1.0, 0.0};
   nav_constraints(g, q, xf, c, Jq, Jx);
   REQUIRE(c[4] == Approx(0.8));
   REQUIRE(std::hypot(Jq[12], Jq[13]) == Approx(1.0));
-  REQUIRE(std::hypot(Jx[8], Jx[9]) == Approx(1.0));
+  REQUIRE(std::hypot(Jx[12], Jx[13]) == Approx(1.0));
+  // ATACOM's rows: look-ahead point on the swept segment.
+  const NavConstraintGeometry ga = nav_constraint_geometry(default_nav_config());
+  const double xs[3] = {0.5, 1.0, 0.0};  // segment [0.5, 1.2] x {1}, point at (1.2, 1)
+  nav_constraints(ga, q, xs, c, Jq, Jx);
+  for (int i = 0; i < 15; ++i) REQUIRE(std::isfinite(Jq[i]));
+  for (int i = 0; i < 15; ++i) REQUIRE(std::isfinite(Jx[i]));
+  REQUIRE(std::hypot(Jq[12], Jq[13]) == Approx(1.0));
 }
 
 TEST_CASE("nav constraints: batched kernel equals the per-env function", "[nav_constraints]") {
-  const NavConstraintGeometry g;
+  const NavConstraintGeometry g = nav_constraint_geometry(default_nav_config());
   const DiffDriveSystem sys;
   const int N = 9;
   ProjectorBatch pb;
@@ -64,8 +122,8 @@ TEST_CASE("nav constraints: batched kernel equals the per-env function", "[nav_c
   pb.G.assign(N * 6, -1.0);
   pb.c.assign(N * 5, -1.0);
   pb.Jq.assign(N * 15, -1.0);
-  pb.Jx.assign(N * 10, -1.0);
-  pb.xdot.assign(N * 2, -1.0);
+  pb.Jx.assign(N * 15, -1.0);
+  pb.xdot.assign(N * 3, -1.0);
   std::vector<double> tiago(3 * N), fetch(3 * N), fvel(3 * N);
   Rng rng(5, 1);
   for (auto& v : tiago) v = rng.uniform(-2.0, 2.0);
@@ -77,17 +135,16 @@ TEST_CASE("nav constraints: batched kernel equals the per-env function", "[nav_c
       REQUIRE(pb.c[5 * i] == -1.0);
       continue;
     }
-    double c[5], Jq[15], Jx[10], f[3], G[6];
-    const double xf[2] = {fetch[3 * i], fetch[3 * i + 1]};
+    double c[5], Jq[15], Jx[15], f[3], G[6];
+    const double xf[3] = {fetch[3 * i], fetch[3 * i + 1], fetch[3 * i + 2]};
     nav_constraints(g, &tiago[3 * i], xf, c, Jq, Jx);
     sys.eval(&tiago[3 * i], f, G);
     for (int r = 0; r < 5; ++r) REQUIRE(pb.c[5 * i + r] == c[r]);
     for (int r = 0; r < 15; ++r) REQUIRE(pb.Jq[15 * i + r] == Jq[r]);
-    for (int r = 0; r < 10; ++r) REQUIRE(pb.Jx[10 * i + r] == Jx[r]);
+    for (int r = 0; r < 15; ++r) REQUIRE(pb.Jx[15 * i + r] == Jx[r]);
     for (int r = 0; r < 6; ++r) REQUIRE(pb.G[6 * i + r] == G[r]);
     for (int r = 0; r < 3; ++r) REQUIRE(pb.f[3 * i + r] == 0.0);
-    REQUIRE(pb.xdot[2 * i] == fvel[3 * i]);
-    REQUIRE(pb.xdot[2 * i + 1] == fvel[3 * i + 1]);
+    for (int r = 0; r < 3; ++r) REQUIRE(pb.xdot[3 * i + r] == fvel[3 * i + r]);
   }
 }
 
@@ -102,7 +159,10 @@ TEST_CASE("nav constraints: sideways obstacle (J_q G loses rank) keeps the proje
   const NavConfig cfg = default_nav_config();
   const NavEnv env(cfg, 1);
   const ProjectorModel model = env.projector_model();
-  const NavConstraintGeometry g = nav_constraint_geometry(cfg);
+  // The task's rows, which do not depend on theta: they lose rank exactly
+  // sideways. (ATACOM's default rows have an omega entry through the
+  // look-ahead points; the projector must stay finite on both.)
+  const NavConstraintGeometry g = nav_task_geometry(nav_constraint_geometry(cfg));
   const DiffDriveSystem sys = nav_tiago_system(cfg);
   const double dt = cfg.dt;
   // Largest one-step increase of a row whose J_q G entry is zero: the arc
@@ -170,8 +230,8 @@ TEST_CASE("nav constraints: sideways obstacle (J_q G loses rank) keeps the proje
                 qn[1] = q[1] + v * dt * std::sin(q[2]);
               }
               qn[2] = th;
-              const double xf[2] = {fetch[0], fetch[1]};
-              double c0[5], c1[5], Jq[15], Jx[10];
+              double c0[5], c1[5], Jq[15], Jx[15];
+              const double* xf = fetch;
               nav_constraints(g, q, xf, c0, Jq, Jx);
               nav_constraints(g, qn, xf, c1, Jq, Jx);
               for (int r = 0; r < 5; ++r)

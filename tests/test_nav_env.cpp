@@ -604,12 +604,11 @@ CollisionTally random_alpha_rollout(bool atacom, uint64_t seed) {
 }  // namespace
 
 TEST_CASE("nav env: 100k steps of random alpha, collision rate with and without ATACOM", "[nav_env][slow]") {
-  // Five seeds of 100k steps each. Every wall contact must be prevented; the
-  // Fetch collisions that remain are nearly all pins against a wall, which a
-  // myopic projection cannot avoid for a non-holonomic base driven by random
-  // alpha (docs/envs_nav.md, "Collision rates under random alpha"). The
-  // issue's target ratio is 20x; measured about 10x. The guard below fails if
-  // ATACOM regresses.
+  // Five seeds of 100k steps each. Every wall contact must be prevented and
+  // the task's wall rows (reported in EnvBuffers::constraints) never rise
+  // above 0; Fetch collisions must be at least 20x rarer than without ATACOM
+  // (the issue's target; docs/envs_nav.md, "Collision rates under random
+  // alpha": measured 45x with the look-ahead and swept rows).
   CollisionTally plain_all, safe_all;
   for (uint64_t seed = 1; seed <= 5; ++seed) {
     const CollisionTally plain = random_alpha_rollout(false, seed);
@@ -630,7 +629,7 @@ TEST_CASE("nav env: 100k steps of random alpha, collision rate with and without 
                 << " collisions per 1000 steps, with ATACOM " << 1000.0 * safe_all.total() / safe_all.steps
                 << ", ratio " << ratio);
   REQUIRE(plain_all.total() > 250);
-  REQUIRE(ratio >= 6.0);
+  REQUIRE(ratio >= 20.0);
 }
 
 TEST_CASE("nav env: registry builds the plain and the ATACOM-wrapped env", "[nav_env]") {
@@ -647,7 +646,7 @@ TEST_CASE("nav env: registry builds the plain and the ATACOM-wrapped env", "[nav
   REQUIRE(safe->spec().horizon == 100);
   REQUIRE(wrapped->model().beta[4] == 2.0);
   REQUIRE(wrapped->model().K_c == Approx(30.0));
-  REQUIRE(wrapped->model().p == 2);
+  REQUIRE(wrapped->model().p == 3);
   REQUIRE_FALSE(wrapped->model().has_drift);
   // Inner info columns keep their indices; SafeEnv appends its own.
   REQUIRE(safe->spec().info_names[kNavInfoRobotCollision] == "robot_collision");

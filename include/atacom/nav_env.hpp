@@ -74,20 +74,33 @@ struct NavConfig {
   } reward;
 
   // Geometry and ATACOM slack settings of the 5 constraint rows
-  // (docs/envs_nav.md explains the choices).
+  // (docs/envs_nav.md explains the choices). The env reports the task's rows
+  // (margins only, EnvBuffers::constraints); ATACOM enforces stricter rows
+  // built from them with the look-ahead, sweep and buffer below, each of
+  // which is >= the task's row, so keeping them <= 0 keeps the task's <= 0.
   struct Constraints {
     double wall_margin = 0.1;       // m, reference 3.5
     double fetch_margin = 0.1;      // m, reference 3.5
+    // ATACOM's rows: wall rows at the point wall_lookahead ahead of TIAGo
+    // with radius r_T + wall_lookahead, moved in by wall_buffer; the Fetch
+    // row from the point fetch_lookahead ahead (radius r_T + fetch_lookahead)
+    // to the segment of length fetch_sweep ahead of Fetch along its heading.
+    // The look-aheads give the rows an omega entry (ATACOM can turn TIAGo);
+    // the sweep makes TIAGo leave Fetch's path before it is pinned.
+    double wall_lookahead = 0.1;    // m
+    double fetch_lookahead = 0.2;   // m
+    double fetch_sweep = 0.7;       // m (Fetch's top speed x 1 s)
+    double wall_buffer = 0.02;      // m
     std::string slack = "softcorner";
     std::string basis = "projected";
     // Slack shape and floor per row. An active row weighs 1 / a(s)^2 in the
     // projection; where Fetch pins TIAGo against a wall the rows conflict and
     // the exact, static walls must win: a_wall(s) << a_fetch(tol_fetch) for
     // every s TIAGo can cover in one step (v_max dt = 3.3 cm):
-    // e^{3 * 0.033} - 1 = 0.10 < e^{3 * 0.1} - 1 = 0.35.
+    // e^{3 * 0.033} - 1 = 0.10 < e^{4 * 0.1} - 1 = 0.49.
     double wall_beta = 3.0;
     double wall_tol = 1e-6;
-    double fetch_beta = 3.0;
+    double fetch_beta = 4.0;
     double fetch_tol = 0.1;
     double violation_tolerance = 1e-3;  // EnvSpec::constraint_tolerance of every row, m
   } constraints;
@@ -168,7 +181,7 @@ class NavEnv final : public ControlAffineEnv {
   void set_profiling(bool on) override;
   std::vector<double> profile_seconds() const override;
 
-  // ATACOM: n = 3, m = 2, k = 5, p = 2, dense G, no drift, K_c = 1/dt.
+  // ATACOM: n = 3, m = 2, k = 5, p = 3 (Fetch's pose), dense G, no drift, K_c = 1/dt.
   ProjectorModel projector_model() const override;
   void constraint_model(ProjectorBatch& pb, int begin, int end) const override;
 
@@ -191,7 +204,8 @@ class NavEnv final : public ControlAffineEnv {
   void step_block(const double* actions, int lo, int hi, int block_index);
 
   NavConfig cfg_;
-  NavConstraintGeometry geom_;
+  NavConstraintGeometry geom_;       // ATACOM's rows
+  NavConstraintGeometry task_geom_;  // the task's rows, reported in EnvBuffers::constraints
   DiffDriveSystem sys_;
   EnvSpec spec_;
   NavBatch st_;

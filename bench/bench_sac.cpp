@@ -1,0 +1,170 @@
+// bench_sac: SAC gradient updates/s, actor actions/s and the machine's
+// single-precision GEMM rate, as JSON lines.
+//
+//   build/bench/bench_sac [--quick]
+//
+// Every figure is the best of `repeats` timed windows after a warm-up (noisy
+// shared machines only ever slow a window down). sac_update includes replay
+// sampling; flops counts every GEMM of one update (forward and backward), as
+// the tape executes them. sac_update_cpu gives updates per second of process
+// CPU time, which other jobs on a shared machine do not distort.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <vector>
+
+#include <Eigen/Core>
+#include <tbb/parallel_for.h>
+
+#include "atacom/parallel.hpp"
+#include "atacom/replay_buffer.hpp"
+#include "atacom/sac.hpp"
+
+using namespace atacom;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+int repeats = 5;
+double window_s = 1.0;
+
+double cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// Calls fn() in windows of ~window_s; returns the best calls per second.
+template <class Fn>
+double best_rate(Fn&& fn) {
+  for (int i = 0; i < 3; ++i) fn();  // warm-up: arenas, caches, TBB workers
+  double best = 0;
+  for (int r = 0; r < repeats; ++r) {
+    int64_t calls = 0;
+    const auto t0 = Clock::now();
+    double el = 0;
+    do {
+      fn();
+      ++calls;
+      el = std::chrono::duration<double>(Clock::now() - t0).count();
+    } while (el < window_s);
+    best = std::max(best, double(calls) / el);
+  }
+  return best;
+}
+
+void bench_sac_update(int B, int threads) {
+  set_num_threads(threads);
+  const int D = 20, A = 7;
+  SacConfig cfg = default_sac_config();
+  cfg.batch_size = B;
+  Sac sac(D, A, cfg, 1);
+  ReplayBuffer rb(20000, D, A);
+  Rng r(2, 0);
+  std::vector<float> o(D), no(D), rew(1), cost(1, 0.0f);
+  std::vector<double> a(A);
+  for (int i = 0; i < 20000; ++i) {
+    for (auto& v : o) v = float(r.uniform(-1, 1));
+    for (auto& v : no) v = float(r.uniform(-1, 1));
+    for (auto& v : a) v = r.uniform(-1, 1);
+    rew[0] = float(r.uniform(-1, 0));
+    const uint8_t term = 0, trunc = 0;
+    rb.add(1, o.data(), a.data(), rew.data(), cost.data(), no.data(), &term, &trunc);
+  }
+  ReplayBatch batch;
+  batch.resize(B, D, A);
+  Rng sample_rng(3, 0);
+  auto update = [&]() {
+    rb.sample(sample_rng, batch);
+    sac.update(batch, true);
+  };
+  update();
+  const double f0 = sac.gemm_flops();
+  update();
+  const double flops = sac.gemm_flops() - f0;
+  const double per_s = best_rate(update);
+  std::printf("{\"bench\": \"sac_update\", \"obs\": %d, \"act\": %d, \"hidden\": [256, 256], \"batch\": %d, "
+              "\"threads\": %d, \"per_s\": %.1f, \"flops\": %.0f, \"gflops\": %.2f}\n",
+              D, A, B, threads, per_s, flops, flops * per_s * 1e-9);
+  // Updates per second of process CPU time (all threads): robust to other
+  // jobs on the machine, and shows the parallel overhead (spinning workers,
+  // task spawns) as a drop from the 1-thread figure.
+  const double c0 = cpu_seconds();
+  const auto w0 = Clock::now();
+  int64_t n = 0;
+  while (std::chrono::duration<double>(Clock::now() - w0).count() < window_s) {
+    update();
+    ++n;
+  }
+  const double cpu = cpu_seconds() - c0;
+  std::printf("{\"bench\": \"sac_update_cpu\", \"batch\": %d, \"threads\": %d, \"updates_per_cpu_s\": %.1f, "
+              "\"cpus_used\": %.2f}\n", B, threads, double(n) / cpu,
+              cpu / std::chrono::duration<double>(Clock::now() - w0).count());
+  std::fflush(stdout);
+}
+
+void bench_actor_act(int N, int threads) {
+  set_num_threads(threads);
+  const int D = 20, A = 7;
+  Sac sac(D, A, default_sac_config(), 1);
+  std::vector<float> obs(size_t(N) * D);
+  Rng r(4, 0);
+  for (auto& v : obs) v = float(r.uniform(-1, 1));
+  std::vector<Rng> rngs;
+  for (int i = 0; i < N; ++i) rngs.emplace_back(5, uint64_t(i));
+  std::vector<double> act(size_t(N) * A);
+  const double calls = best_rate([&]() { sac.act(obs.data(), N, false, rngs.data(), act.data()); });
+  // obs 20, act 7, hidden 256-256 like sac_update; stochastic actions
+  std::printf("{\"bench\": \"actor_act\", \"N\": %d, \"threads\": %d, \"per_s\": %.0f}\n", N, threads, calls * N);
+  std::fflush(stdout);
+}
+
+// Eigen's float GEMM C = A B, one independent product per thread (Eigen
+// itself runs single-threaded here), aggregate rate.
+void bench_gemm_peak(int m, int k, int n, int threads) {
+  set_num_threads(threads);
+  using M = RowMat<float>;
+  std::vector<M> As, Bs, Cs;
+  for (int t = 0; t < threads; ++t) {
+    As.push_back(M::Random(m, k));
+    Bs.push_back(M::Random(k, n));
+    Cs.push_back(M::Zero(m, n));
+  }
+  const int inner = std::max(1, int(2e7 / (2.0 * m * k * n)));
+  auto run = [&]() {
+    tbb::parallel_for(0, threads, [&](int t) {
+      for (int i = 0; i < inner; ++i) Cs[size_t(t)].noalias() = As[size_t(t)] * Bs[size_t(t)];
+    });
+  };
+  const double per_s = best_rate(run);
+  std::printf("{\"bench\": \"gemm_peak\", \"m\": %d, \"k\": %d, \"n\": %d, \"threads\": %d, \"gflops\": %.1f}\n", m,
+              k, n, threads, per_s * inner * 2.0 * m * k * n * 1e-9);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--quick")) {
+      repeats = 2;
+      window_s = 0.3;
+    } else {
+      std::fprintf(stderr, "usage: bench_sac [--quick]\n");
+      return 2;
+    }
+  }
+  for (int threads : {1, 2})
+    for (int B : {64, 256}) bench_sac_update(B, threads);
+  for (int threads : {1, 2})
+    for (int N : {1, 1024, 16384}) bench_actor_act(N, threads);
+  for (int threads : {1, 2}) {
+    bench_gemm_peak(64, 256, 256, threads);
+    bench_gemm_peak(256, 256, 256, threads);
+    bench_gemm_peak(64, 27, 256, threads);
+    bench_gemm_peak(1024, 1024, 1024, threads);
+  }
+  return 0;
+}

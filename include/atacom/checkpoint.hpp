@@ -1,0 +1,30 @@
+// Checkpoint files: versioned binary with an embedded JSON manifest, written
+// atomically.
+//
+// Layout: "ATACKPT\0" | u32 version | u64 manifest bytes | manifest (JSON) |
+//         u64 payload bytes | payload | u64 FNV-1a of everything before.
+// The manifest says what the payload holds (counters, sizes) so a human or a
+// tool can inspect a run without parsing the payload. Writing goes to a
+// temporary file in the same directory, fsync, rename over the old file, fsync
+// the directory: a crash leaves either the old or the new checkpoint, never a
+// mix. Reading checks magic, version, lengths and checksum and throws
+// std::runtime_error naming the problem.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace atacom {
+
+constexpr uint32_t kCheckpointVersion = 1;
+
+struct Checkpoint {
+  nlohmann::json manifest;
+  std::string payload;  // opaque bytes, written by the trainer
+};
+
+void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt);
+Checkpoint read_checkpoint(const std::string& path);
+
+}  // namespace atacom

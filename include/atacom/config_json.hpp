@@ -1,0 +1,75 @@
+// Strict reading of config structs from JSON.
+//
+// Every config struct parses through a ConfigReader: get() takes the keys it
+// knows (with a type check that names the key), finish() rejects any key that
+// was not taken. So a typo in a config file is an error, never a silent
+// default.
+#pragma once
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace atacom {
+
+class ConfigReader {
+ public:
+  ConfigReader(const nlohmann::json& j, std::string section) : j_(j), section_(std::move(section)) {
+    if (!j_.is_object()) throw std::invalid_argument("config section '" + section_ + "' must be a JSON object");
+  }
+
+  template <class V>
+  void get(const char* key, V& v) {
+    if (!j_.contains(key)) return;
+    seen_.insert(key);
+    const nlohmann::json& x = j_.at(key);
+    try {
+      check_type(x, v);
+      v = x.get<V>();
+    } catch (const nlohmann::json::exception&) {
+      throw std::invalid_argument("config key '" + section_ + "." + key + "' has the wrong type (" +
+                                  x.type_name() + ")");
+    }
+  }
+
+  // A nested section handled by its own from_json.
+  const nlohmann::json* sub(const char* key) {
+    if (!j_.contains(key)) return nullptr;
+    seen_.insert(key);
+    return &j_.at(key);
+  }
+
+  void finish() const {
+    for (auto it = j_.begin(); it != j_.end(); ++it)
+      if (!seen_.count(it.key()))
+        throw std::invalid_argument("unknown config key '" + section_ + "." + it.key() + "'");
+  }
+
+ private:
+  template <class V>
+  static void check_type(const nlohmann::json& x, const V&) {
+    if constexpr (std::is_same_v<V, bool>) {
+      if (!x.is_boolean()) throw_type();
+    } else if constexpr (std::is_integral_v<V>) {
+      if (!x.is_number_integer()) throw_type();
+    } else if constexpr (std::is_floating_point_v<V>) {
+      if (!x.is_number()) throw_type();
+    } else if constexpr (std::is_same_v<V, std::string>) {
+      if (!x.is_string()) throw_type();
+    } else if constexpr (std::is_same_v<V, std::vector<int>>) {
+      if (!x.is_array()) throw_type();
+      for (const auto& e : x)
+        if (!e.is_number_integer()) throw_type();
+    }
+  }
+  [[noreturn]] static void throw_type() { throw nlohmann::json::type_error::create(302, "type", nullptr); }
+
+  const nlohmann::json& j_;
+  std::string section_;
+  std::set<std::string> seen_;
+};
+
+}  // namespace atacom

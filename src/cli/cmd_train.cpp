@@ -1,0 +1,91 @@
+// atacom train: SAC / ATACOM-SAC on any registered env (logic in train/trainer.cpp).
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "atacom/trainer.hpp"
+#include "cli/command.hpp"
+
+namespace atacom::cli {
+namespace {
+
+nlohmann::json read_json_file(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw std::invalid_argument("cannot read config file '" + path + "'");
+  try {
+    return nlohmann::json::parse(f);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument("config file '" + path + "' is not valid JSON: " + e.what());
+  }
+}
+
+struct TrainArgs {
+  std::string env, algo, config, out;
+  int64_t seed = 0, steps = 0;
+  int envs = 0;
+  bool resume = false;
+  CLI::Option *o_env = nullptr, *o_algo = nullptr, *o_seed = nullptr, *o_steps = nullptr, *o_envs = nullptr;
+};
+
+int run(const TrainArgs& a) {
+  RunConfig rc;
+  const std::filesystem::path saved = std::filesystem::path(a.out) / "config.json";
+  if (a.resume && std::filesystem::exists(saved)) {
+    if (!a.config.empty())
+      throw std::invalid_argument("--config cannot be combined with --resume: the run's own config.json is used");
+    rc = resolve_run_config(read_json_file(saved.string()));
+    auto same = [](const CLI::Option* o, bool equal, const char* flag) {
+      if (o && o->count() > 0 && !equal)
+        throw std::invalid_argument(std::string(flag) + " differs from the run being resumed (see its config.json)");
+    };
+    same(a.o_env, a.env == rc.train.env, "--env");
+    same(a.o_algo, a.algo == rc.train.algo, "--algo");
+    same(a.o_seed, a.seed == rc.train.seed, "--seed");
+    same(a.o_envs, a.envs == rc.train.num_envs, "--envs");
+    if (a.o_steps->count() > 0) rc.train.steps = a.steps;  // a resumed run may extend its budget
+  } else {
+    nlohmann::json file = a.config.empty() ? nlohmann::json::object() : read_json_file(a.config);
+    if (!file.is_object()) throw std::invalid_argument("config file must hold a JSON object");
+    nlohmann::json& t = file["train"];
+    if (t.is_null()) t = nlohmann::json::object();
+    if (!t.is_object()) throw std::invalid_argument("config section 'train' must be a JSON object");
+    // Command-line flags win over the file, the file over the defaults.
+    if (a.o_env->count()) t["env"] = a.env;
+    if (a.o_algo->count()) t["algo"] = a.algo;
+    if (a.o_seed->count()) t["seed"] = a.seed;
+    if (a.o_steps->count()) t["steps"] = a.steps;
+    if (a.o_envs->count()) t["num_envs"] = a.envs;
+    rc = resolve_run_config(file);
+  }
+  TrainOptions opts;
+  opts.out_dir = a.out;
+  opts.resume = a.resume;
+  opts.log = &std::cerr;
+  opts.log_is_tty = ::isatty(STDERR_FILENO) != 0;
+  const TrainSummary s = run_training(rc, opts);
+  std::cout << s.summary.dump() << std::endl;
+  return 0;
+}
+
+const RegisterCommand reg{Command{
+    "train", "train SAC or ATACOM-SAC on a registered env, with evaluation, checkpoints and resume",
+    [](CLI::App& app) -> std::function<int()> {
+      auto a = std::make_shared<TrainArgs>();
+      a->o_env = app.add_option("--env", a->env, "env name (see the registry)");
+      a->o_algo = app.add_option("--algo", a->algo, "sac (plain env) or atacom-sac (env wrapped in ATACOM)");
+      a->o_seed = app.add_option("--seed", a->seed, "random seed")->check(CLI::NonNegativeNumber);
+      a->o_steps = app.add_option("--steps", a->steps, "env transitions to train for (all envs together)")
+                       ->check(CLI::PositiveNumber);
+      a->o_envs = app.add_option("--envs", a->envs, "parallel training envs N")->check(CLI::PositiveNumber);
+      app.add_option("--config", a->config, "JSON file with env/sac/train sections overriding the defaults");
+      app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();
+      app.add_flag("--resume", a->resume, "continue the run in --out from its last checkpoint");
+      return [a]() { return run(*a); };
+    }}};
+
+}  // namespace
+}  // namespace atacom::cli

@@ -1,0 +1,131 @@
+#include "atacom/adam.hpp"
+
+#include <cmath>
+#include <istream>
+#include <ostream>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "atacom/binary_io.hpp"
+#include "atacom/config_json.hpp"
+#include "atacom/parallel.hpp"
+
+namespace atacom {
+
+namespace {
+constexpr int64_t kBlock = 1 << 14;  // elements per task; fixed
+}
+
+AdamConfig default_adam_config() { return AdamConfig{}; }
+
+void to_json(nlohmann::json& j, const AdamConfig& c) {
+  j = nlohmann::json{{"beta1", c.beta1}, {"beta2", c.beta2}, {"eps", c.eps}};
+}
+
+void from_json(const nlohmann::json& j, AdamConfig& c) {
+  ConfigReader r(j, "adam");
+  c = default_adam_config();
+  r.get("beta1", c.beta1);
+  r.get("beta2", c.beta2);
+  r.get("eps", c.eps);
+  r.finish();
+  if (!(c.beta1 >= 0 && c.beta1 < 1) || !(c.beta2 >= 0 && c.beta2 < 1))
+    throw std::invalid_argument("adam.beta1 and adam.beta2 must be in [0, 1)");
+  if (!(c.eps > 0)) throw std::invalid_argument("adam.eps must be > 0");
+}
+
+template <class T>
+void Adam<T>::step(T* p, const T* g, double lr) {
+  ++t_;
+  const T b1 = T(cfg_.beta1), b2 = T(cfg_.beta2), eps = T(cfg_.eps);
+  const T step_size = T(lr / (1.0 - std::pow(cfg_.beta1, double(t_))));
+  const T inv_sqrt_bc2 = T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_))));
+  T* m = m_.data();
+  T* v = v_.data();
+  // Eigen array expressions: vectorised sqrt and division (a plain loop
+  // calling std::sqrt stays scalar because of errno semantics).
+  parallel_blocks(int64_t(m_.size()), kBlock, [&](int64_t lo, int64_t hi) {
+    using A = Eigen::Array<T, Eigen::Dynamic, 1>;
+    const Eigen::Index n = hi - lo;
+    Eigen::Map<A> P(p + lo, n), M(m + lo, n), V(v + lo, n);
+    Eigen::Map<const A> G(g + lo, n);
+    M = b1 * M + (T(1) - b1) * G;
+    V = b2 * V + (T(1) - b2) * G.square();
+    P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
+  });
+}
+
+template <class T>
+void Adam<T>::step_fused(T* p, T* g, double lr, T* target, double tau) {
+  ++t_;
+  const T b1 = T(cfg_.beta1), b2 = T(cfg_.beta2), eps = T(cfg_.eps);
+  const T step_size = T(lr / (1.0 - std::pow(cfg_.beta1, double(t_))));
+  const T inv_sqrt_bc2 = T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_))));
+  const T ta = T(1.0 - tau), tb = T(tau);
+  T* m = m_.data();
+  T* v = v_.data();
+  parallel_blocks(int64_t(m_.size()), kBlock, [&](int64_t lo, int64_t hi) {
+    using A = Eigen::Array<T, Eigen::Dynamic, 1>;
+    const Eigen::Index n = hi - lo;
+    Eigen::Map<A> P(p + lo, n), M(m + lo, n), V(v + lo, n), G(g + lo, n);
+    M = b1 * M + (T(1) - b1) * G;
+    V = b2 * V + (T(1) - b2) * G.square();
+    P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
+    G.setZero();
+    if (target) {
+      Eigen::Map<A> Tg(target + lo, n);
+      Tg = ta * Tg + tb * P;
+    }
+  });
+}
+
+template <class T>
+void Adam<T>::save(std::ostream& out) const {
+  bin::write_pod<int64_t>(out, t_);
+  bin::write_vec(out, m_);
+  bin::write_vec(out, v_);
+}
+
+template <class T>
+void Adam<T>::load(std::istream& in) {
+  const int64_t t = bin::read_pod<int64_t>(in, "adam.t");
+  const auto n = static_cast<int64_t>(m_.size());
+  bin::read_vec(in, m_, "adam.m", n);
+  bin::read_vec(in, v_, "adam.v", n);
+  t_ = t;
+}
+
+template <class T>
+double clip_grad_norm(T* g, size_t n, double max_norm) {
+  // 8 interleaved partial sums in a fixed pattern: vectorisable, and the
+  // same bits for any thread count.
+  double part[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 8 <= n; i += 8)
+    for (int k = 0; k < 8; ++k) part[k] += double(g[i + size_t(k)]) * double(g[i + size_t(k)]);
+  for (; i < n; ++i) part[0] += double(g[i]) * double(g[i]);
+  const double norm = std::sqrt(((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7])));
+  if (max_norm > 0 && std::isfinite(norm) && norm > max_norm) {
+    const T scale = T(max_norm / (norm + 1e-6));
+    for (size_t j = 0; j < n; ++j) g[j] *= scale;
+  }
+  return norm;
+}
+
+template <class T>
+void polyak_update(T* target, const T* source, size_t n, double tau) {
+  const T a = T(1.0 - tau), b = T(tau);
+  parallel_blocks(int64_t(n), kBlock, [&](int64_t lo, int64_t hi) {
+    for (int64_t i = lo; i < hi; ++i) target[i] = a * target[i] + b * source[i];
+  });
+}
+
+template class Adam<float>;
+template class Adam<double>;
+template double clip_grad_norm<float>(float*, size_t, double);
+template double clip_grad_norm<double>(double*, size_t, double);
+template void polyak_update<float>(float*, const float*, size_t, double);
+template void polyak_update<double>(double*, const double*, size_t, double);
+
+}  // namespace atacom

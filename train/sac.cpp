@@ -1,0 +1,278 @@
+#include "atacom/sac.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "atacom/binary_io.hpp"
+#include "atacom/config_json.hpp"
+#include "atacom/parallel.hpp"
+
+#include <tbb/parallel_invoke.h>
+
+namespace atacom {
+
+SacConfig default_sac_config() {
+  SacConfig c;
+  c.actor = default_mlp_config();
+  c.critic = default_mlp_config();
+  c.batch_size = 64;
+  c.gamma = 0.995;
+  c.tau = 1e-3;
+  c.lr_actor = 3e-4;
+  c.lr_critic = 3e-4;
+  c.lr_alpha = 1e-6;
+  c.init_alpha = 1.0;
+  c.target_entropy = std::nullopt;
+  c.log_std_min = -20.0;
+  c.log_std_max = 2.0;
+  c.replay_capacity = 200000;
+  c.initial_replay = 5000;
+  c.warmup = 5000;
+  c.updates_per_step = 1.0;
+  c.obs_norm = true;
+  c.grad_clip = 0.0;
+  c.adam = default_adam_config();
+  return c;
+}
+
+void to_json(nlohmann::json& j, const SacConfig& c) {
+  j = nlohmann::json{
+      {"actor", c.actor}, {"critic", c.critic}, {"batch_size", c.batch_size}, {"gamma", c.gamma},
+      {"tau", c.tau}, {"lr_actor", c.lr_actor}, {"lr_critic", c.lr_critic}, {"lr_alpha", c.lr_alpha},
+      {"init_alpha", c.init_alpha},
+      {"target_entropy", c.target_entropy ? nlohmann::json(*c.target_entropy) : nlohmann::json(nullptr)},
+      {"log_std_min", c.log_std_min}, {"log_std_max", c.log_std_max}, {"replay_capacity", c.replay_capacity},
+      {"initial_replay", c.initial_replay}, {"warmup", c.warmup}, {"updates_per_step", c.updates_per_step},
+      {"obs_norm", c.obs_norm}, {"grad_clip", c.grad_clip}, {"adam", c.adam}};
+}
+
+void from_json(const nlohmann::json& j, SacConfig& c) {
+  ConfigReader r(j, "sac");
+  c = default_sac_config();
+  if (const auto* s = r.sub("actor")) c.actor = s->get<MlpConfig>();
+  if (const auto* s = r.sub("critic")) c.critic = s->get<MlpConfig>();
+  r.get("batch_size", c.batch_size);
+  r.get("gamma", c.gamma);
+  r.get("tau", c.tau);
+  r.get("lr_actor", c.lr_actor);
+  r.get("lr_critic", c.lr_critic);
+  r.get("lr_alpha", c.lr_alpha);
+  r.get("init_alpha", c.init_alpha);
+  if (const auto* s = r.sub("target_entropy")) {
+    if (s->is_null()) c.target_entropy = std::nullopt;
+    else if (s->is_number()) c.target_entropy = s->get<double>();
+    else throw std::invalid_argument("config key 'sac.target_entropy' must be a number or null (-act_dim)");
+  }
+  r.get("log_std_min", c.log_std_min);
+  r.get("log_std_max", c.log_std_max);
+  r.get("replay_capacity", c.replay_capacity);
+  r.get("initial_replay", c.initial_replay);
+  r.get("warmup", c.warmup);
+  r.get("updates_per_step", c.updates_per_step);
+  r.get("obs_norm", c.obs_norm);
+  r.get("grad_clip", c.grad_clip);
+  if (const auto* s = r.sub("adam")) c.adam = s->get<AdamConfig>();
+  r.finish();
+  auto bad = [](const std::string& what) { throw std::invalid_argument("config: sac." + what); };
+  if (c.batch_size < 1 || c.batch_size > (1 << 20)) bad("batch_size must be in [1, 2^20]");
+  if (!(c.gamma >= 0 && c.gamma <= 1)) bad("gamma must be in [0, 1]");
+  if (!(c.tau > 0 && c.tau <= 1)) bad("tau must be in (0, 1]");
+  if (!(c.lr_actor >= 0 && std::isfinite(c.lr_actor))) bad("lr_actor must be >= 0");
+  if (!(c.lr_critic >= 0 && std::isfinite(c.lr_critic))) bad("lr_critic must be >= 0");
+  if (!(c.lr_alpha >= 0 && std::isfinite(c.lr_alpha))) bad("lr_alpha must be >= 0");
+  if (!(c.init_alpha > 0 && std::isfinite(c.init_alpha))) bad("init_alpha must be > 0");
+  if (c.target_entropy && !std::isfinite(*c.target_entropy)) bad("target_entropy must be finite");
+  if (!(c.log_std_min < c.log_std_max)) bad("log_std_min must be < log_std_max");
+  if (c.replay_capacity < c.batch_size) bad("replay_capacity must be >= batch_size");
+  if (c.initial_replay < 0 || c.warmup < 0) bad("initial_replay and warmup must be >= 0");
+  if (!(c.updates_per_step >= 0 && c.updates_per_step <= 1000)) bad("updates_per_step must be in [0, 1000]");
+  if (!(c.grad_clip >= 0)) bad("grad_clip must be >= 0");
+}
+
+Sac::Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed)
+    : cfg_(cfg),
+      obs_dim_(obs_dim),
+      act_dim_(act_dim),
+      target_entropy_(cfg.target_entropy ? *cfg.target_entropy : -double(act_dim)),
+      actor_(obs_dim, 2 * act_dim, cfg.actor, 1),
+      critic_(obs_dim + act_dim, 1, cfg.critic, 2),
+      critic_target_(obs_dim + act_dim, 1, cfg.critic, 2),
+      actor_opt_(actor_.params().size(), cfg.adam),
+      critic_opt_(critic_.params().size(), cfg.adam),
+      alpha_opt_(1, cfg.adam),
+      log_alpha_(std::log(cfg.init_alpha)),
+      rng_(seed, 0x5AC) {
+  Rng init(seed, 0x1417);
+  actor_.init(init);
+  critic_.init(init);
+  critic_target_.params() = critic_.params();
+  const size_t B = size_t(cfg.batch_size);
+  noise_pi_.assign(B * act_dim, 0.0f);
+  noise_next_.assign(B * act_dim, 0.0f);
+  y_.assign(B, 0.0f);
+}
+
+double Sac::alpha() const { return std::exp(log_alpha_); }
+
+Sac::PolicyOut Sac::policy(Tape<float>& t, Tape<float>::Id obs, const float* noise, bool param_grads) {
+  const int B = t.node(obs).rows, A = act_dim_;
+  const auto out = actor_.forward(t, obs, param_grads);
+  const auto mu = t.slice(out, 0, A);
+  const auto log_std = t.clamp(t.slice(out, A, 2 * A), float(cfg_.log_std_min), float(cfg_.log_std_max));
+  const auto u = t.add(mu, t.mul(t.exp(log_std), t.constant(noise, B, A)));
+  return {t.tanh(u), t.tanh_gauss_logp(mu, log_std, u)};
+}
+
+void Sac::act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions) {
+  const int A = act_dim_;
+  act_tape_.clear();
+  const auto out = actor_.forward(act_tape_, act_tape_.constant(obs, N, obs_dim_), false);
+  const float* o = act_tape_.value(out).data;
+  const float lo = float(cfg_.log_std_min), hi = float(cfg_.log_std_max);
+  // Per-row noise from the row's own stream: any block partition gives the same actions.
+  parallel_blocks(N, 1024, [&](int64_t b, int64_t e) {
+    for (int64_t i = b; i < e; ++i) {
+      const float* r = o + i * 2 * A;
+      for (int j = 0; j < A; ++j) {
+        float u = r[j];
+        if (!deterministic) {
+          const float ls = std::min(std::max(r[A + j], lo), hi);
+          u += std::exp(ls) * float(rngs[i].normal());
+        }
+        actions[i * A + j] = double(std::tanh(u));
+      }
+    }
+  });
+}
+
+SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
+  const int B = cfg_.batch_size, A = act_dim_, D = obs_dim_;
+  if (batch.B != B) throw std::invalid_argument("Sac::update: batch has " + std::to_string(batch.B) +
+                                                " rows, config batch_size is " + std::to_string(B));
+  SacStats st;
+  // All noise is drawn up front, in a fixed order, so the two phases below
+  // can run in any order or concurrently.
+  if (update_actor)
+    for (auto& z : noise_pi_) z = float(rng_.normal());
+  for (auto& z : noise_next_) z = float(rng_.normal());
+  const float alpha = float(std::exp(log_alpha_));
+  double mean_logp = 0;
+
+  // Actor phase: gradient of L_pi at the current actor, critics and alpha.
+  // Reads critic parameters, writes only actor gradients.
+  auto actor_phase = [&]() {
+    Tape<float>& t = actor_tape_;
+    t.clear();
+    const auto obs = t.constant(batch.obs.data(), B, D);
+    const PolicyOut pi = policy(t, obs, noise_pi_.data(), true);
+    const auto q = critic_.forward(t, t.concat(obs, pi.action), false);
+    const auto qmin = t.minimum(t.slice(q, 0, 1), t.slice(q, 1, 2));
+    const auto loss = t.mean(t.sub(t.affine(pi.logp, alpha, 0.0f), qmin));
+    t.backward(loss);  // actor grads are zero here: the last step_fused cleared them
+    const float* lp = t.value(pi.logp).data;
+    for (int i = 0; i < B; ++i) mean_logp += lp[i];
+    mean_logp /= B;
+    st.actor_loss = t.scalar(loss);
+  };
+
+  // Critic phase: gradient of L_Q at the current critics, targets, actor and
+  // alpha. Reads actor parameters, writes only critic gradients.
+  auto critic_phase = [&]() {
+    Tape<float>& t = tape_;
+    t.clear();
+    const auto next = t.constant(batch.next_obs.data(), B, D);
+    const PolicyOut pn = policy(t, next, noise_next_.data(), false);
+    const auto qt = critic_target_.forward(t, t.concat(next, pn.action), false);
+    const float* qtv = t.value(qt).data;
+    const float* lpn = t.value(pn.logp).data;
+    const float gamma = float(cfg_.gamma);
+    for (int i = 0; i < B; ++i) {
+      const float v = std::min(qtv[2 * i], qtv[2 * i + 1]) - alpha * lpn[i];
+      // Termination cuts the bootstrap; truncation does not.
+      y_[size_t(i)] = batch.reward[size_t(i)] + gamma * (1.0f - batch.terminated[size_t(i)]) * v;
+    }
+    const auto obs = t.constant(batch.obs.data(), B, D);
+    const auto q = critic_.forward(t, t.concat(obs, t.constant(batch.action.data(), B, A)), true);
+    const auto err = t.sub(q, t.constant(y_.data(), B, 1));
+    const auto loss = t.sum(t.mean(t.square(err), 0));
+    t.backward(loss);  // critic grads are zero here: the last step_fused cleared them
+    st.critic_loss = 0.5 * t.scalar(loss);  // mean over the two critics
+    double qm = 0;
+    const float* qv = t.value(q).data;
+    for (int i = 0; i < 2 * B; ++i) qm += qv[i];
+    st.q_mean = qm / (2 * B);
+  };
+
+  // The phases share no written state, so running them concurrently gives
+  // the same bits as running them one after the other.
+  if (update_actor) tbb::parallel_invoke(actor_phase, critic_phase);
+  else critic_phase();
+
+  if (!std::isfinite(st.critic_loss))
+    throw std::runtime_error("SAC critic update produced a non-finite loss (lower lr_critic or check the rewards)");
+  if (update_actor) {
+    if (!std::isfinite(st.actor_loss) || !std::isfinite(mean_logp))
+      throw std::runtime_error("SAC actor update produced a non-finite loss "
+                               "(lower lr_actor/lr_alpha or check the rewards)");
+    if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
+    actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
+    const double g_alpha = -(mean_logp + target_entropy_);
+    st.alpha_loss = -log_alpha_ * (mean_logp + target_entropy_);
+    alpha_opt_.step(&log_alpha_, &g_alpha, cfg_.lr_alpha);
+    st.entropy = -mean_logp;
+    st.actor_updated = true;
+  }
+  if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
+  // critic step, gradient reset and target Polyak update in one pass
+  critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic,
+                         critic_target_.params().data(), cfg_.tau);
+  return st;
+}
+
+namespace {
+constexpr uint32_t kTagSac = 0x53414331;  // "SAC1"
+}
+
+void Sac::save(std::ostream& out) const {
+  bin::write_tag(out, kTagSac);
+  bin::write_pod<int32_t>(out, obs_dim_);
+  bin::write_pod<int32_t>(out, act_dim_);
+  bin::write_vec(out, actor_.params());
+  bin::write_vec(out, critic_.params());
+  bin::write_vec(out, critic_target_.params());
+  actor_opt_.save(out);
+  critic_opt_.save(out);
+  alpha_opt_.save(out);
+  bin::write_pod<double>(out, log_alpha_);
+  bin::write_rng(out, rng_);
+}
+
+void Sac::load(std::istream& in) {
+  bin::expect_tag(in, kTagSac, "sac");
+  const auto od = bin::read_pod<int32_t>(in, "sac.obs_dim");
+  const auto ad = bin::read_pod<int32_t>(in, "sac.act_dim");
+  if (od != obs_dim_ || ad != act_dim_)
+    throw std::runtime_error("agent snapshot is for obs/act dims " + std::to_string(od) + "/" + std::to_string(ad) +
+                             ", expected " + std::to_string(obs_dim_) + "/" + std::to_string(act_dim_));
+  bin::read_vec(in, actor_.params(), "sac.actor", int64_t(actor_.params().size()));
+  bin::read_vec(in, critic_.params(), "sac.critic", int64_t(critic_.params().size()));
+  bin::read_vec(in, critic_target_.params(), "sac.critic_target", int64_t(critic_target_.params().size()));
+  actor_opt_.load(in);
+  critic_opt_.load(in);
+  alpha_opt_.load(in);
+  log_alpha_ = bin::read_pod<double>(in, "sac.log_alpha");
+  bin::read_rng(in, rng_, "sac.rng");
+}
+
+uint64_t Sac::state_hash() const {
+  std::ostringstream s;
+  save(s);
+  const std::string b = s.str();
+  return bin::fnv1a(b.data(), b.size());
+}
+
+}  // namespace atacom
