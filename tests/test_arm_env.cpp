@@ -11,6 +11,7 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
+#include "atacom/trainer.hpp"
 
 using namespace atacom;
 
@@ -372,4 +373,29 @@ TEST_CASE("set_state places an env and refreshes its model and observation", "[a
   ProjectorBatch pb(env.projector_model(), 3);
   env.constraint_model(pb, 1, 2);
   for (int r = 0; r < kArmRows; ++r) CHECK(std::abs(pb.c[kArmRows + r] - ev.c(r)) < 1e-12);
+}
+
+TEST_CASE("table/shelf: per-env SAC defaults (reference 5.4) under the run config", "[arm_env]") {
+  for (const char* env : {"table", "shelf"}) {
+    RunConfig c = resolve_run_config({{"train", {{"env", env}, {"algo", "atacom-sac"}}}});
+    CHECK(c.sac.lr_actor == 3e-4);
+    CHECK(c.sac.lr_critic == 3e-4);
+    CHECK(c.sac.lr_alpha == 1e-6);
+    REQUIRE(c.sac.target_entropy.has_value());
+    CHECK(*c.sac.target_entropy == -10.0);
+    c = resolve_run_config({{"train", {{"env", env}, {"algo", "sac"}}}});
+    CHECK(c.sac.lr_actor == 1e-5);
+    CHECK(c.sac.lr_critic == 1e-5);
+    // The file's keys win over the env's; null target entropy means -act_dim.
+    c = resolve_run_config({{"train", {{"env", env}, {"algo", "sac"}}},
+                            {"sac", {{"lr_actor", 2e-4}, {"target_entropy", nullptr}}}});
+    CHECK(c.sac.lr_actor == 2e-4);
+    CHECK(c.sac.lr_critic == 1e-5);
+    CHECK(!c.sac.target_entropy.has_value());
+    CHECK_THROWS_WITH(resolve_run_config({{"train", {{"env", env}}}, {"sac", {{"lr_actr", 1.0}}}}),
+                      Catch::Contains("lr_actr"));
+  }
+  // Envs without their own defaults keep the global ones.
+  const RunConfig p = resolve_run_config({{"train", {{"env", "pendulum"}}}});
+  CHECK(p.sac.lr_actor == default_sac_config().lr_actor);
 }

@@ -176,6 +176,7 @@ class ArmEnv final : public ControlAffineEnv {
 };
 
 // Registry hooks (envs/registry.cpp).
+nlohmann::json arm_sac_defaults(const std::string& algo);  // per-env SAC settings (reference 5.4)
 nlohmann::json table_env_default_config();
 nlohmann::json shelf_env_default_config();
 std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs, bool atacom);
