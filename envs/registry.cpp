@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "atacom/arm_env.hpp"
 #include "atacom/nav_env.hpp"
 #include "atacom/pendulum.hpp"
 
@@ -10,6 +11,10 @@ namespace atacom {
 // Each env adds one line here (a function declared next to its class).
 const std::vector<EnvEntry>& env_entries() {
   static const std::vector<EnvEntry> entries = {
+      {"table", "TableEnv: TIAGo++ arm reaching above a table (34 constraints)", true, table_env_default_config,
+       make_table_env, arm_sac_defaults},
+      {"shelf", "ShelfEnvSim: TIAGo++ arm reaching into a shelf (34 constraints)", true, shelf_env_default_config,
+       make_shelf_env, arm_sac_defaults},
       {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
        &nav_default_config_json, &make_nav_env},
       pendulum_env_entry(),

@@ -1,6 +1,7 @@
 #include "atacom/safe_env.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <stdexcept>
 
@@ -54,8 +55,13 @@ void SafeEnv::step(const double* alpha) {
   // Constraint model and projection of one block run back to back, so the
   // Jacobians the env just wrote are still in cache when the kernel reads them.
   parallel_blocks(N, kBlock, [&](int64_t lo, int64_t hi) {
+    const auto t0 = profiling_ ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
     inner_->constraint_model(pb_, static_cast<int>(lo), static_cast<int>(hi));
     project_range(model_, pb_, static_cast<int>(lo), static_cast<int>(hi));
+    if (profiling_)
+      projector_ns_.fetch_add(
+          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count(),
+          std::memory_order_relaxed);
   });
   inner_->step(pb_.a.data());
   mirror_buffers();
@@ -70,6 +76,25 @@ void SafeEnv::step(const double* alpha) {
     for (int r = 1; r < k; ++r) mx = std::max(mx, c[r]);
     info[2] = static_cast<float>(mx);
   }
+}
+
+std::vector<std::string> SafeEnv::profile_sections() const {
+  std::vector<std::string> s = inner_->profile_sections();
+  s.push_back("projector");
+  return s;
+}
+
+void SafeEnv::set_profiling(bool on) {
+  inner_->set_profiling(on);
+  profiling_ = on;
+  projector_ns_.store(0);
+}
+
+std::vector<double> SafeEnv::profile_seconds() const {
+  std::vector<double> s = inner_->profile_seconds();
+  s.resize(inner_->profile_sections().size(), 0.0);
+  s.push_back(projector_ns_.load() * 1e-9);
+  return s;
 }
 
 void SafeEnv::mirror_buffers() {

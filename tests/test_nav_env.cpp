@@ -651,7 +651,7 @@ TEST_CASE("nav env: registry builds the plain and the ATACOM-wrapped env", "[nav
   // Inner info columns keep their indices; SafeEnv appends its own.
   REQUIRE(safe->spec().info_names[kNavInfoRobotCollision] == "robot_collision");
   REQUIRE(safe->spec().info_names.size() == static_cast<size_t>(kNavInfoCount) + 3);
-  REQUIRE(safe->profile_sections() == std::vector<std::string>{"box2d", "env"});
+  REQUIRE(safe->profile_sections() == std::vector<std::string>{"box2d", "env", "projector"});
   req.config = {{"constraints", {{"fetch_gamma", 2.0}}}};
   REQUIRE_THROWS_WITH(make_env(req), Catch::Contains("fetch_gamma"));
   req.config = {{"tiago", {{"radius", -1.0}}}};

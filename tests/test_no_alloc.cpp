@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstddef>
 
+#include "atacom/arm_env.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
 
@@ -80,6 +81,34 @@ TEST_CASE("no allocation: projector kernel paths after warm-up", "[alloc]") {
     for (int rep = 0; rep < 3; ++rep) project_range(mod, B, 0, 100, {.store_basis = true});
     const long allocs = g_allocs.load() - before;  // read before INFO, which allocates itself
     INFO("variant " << variant);
+    CHECK(allocs == 0);
+  }
+#endif
+}
+
+TEST_CASE("no allocation: arm env step, resets and constraint model", "[alloc]") {
+#if !ATACOM_COUNT_ALLOCS
+  SUCCEED("allocation counting disabled under AddressSanitizer");
+#else
+  for (ArmTask task : {ArmTask::Table, ArmTask::Shelf}) {
+    const int N = 200;  // one parallel block: runs on this thread
+    ArmEnv env(default_arm_env_config(task), N);
+    ProjectorBatch pb(env.projector_model(), N);
+    Rng rng(2, 0);
+    std::vector<double> a(static_cast<size_t>(N) * kArmJoints);
+    for (double& x : a) x = rng.uniform(-1, 1);
+    env.step(a.data());
+    const long before = g_allocs.load();
+    int episodes = 0;
+    for (int rep = 0; rep < 60; ++rep) {
+      for (double& x : a) x = rng.uniform(-1, 1);
+      env.step(a.data());  // random actions: many episodes end and reset here
+      env.constraint_model(pb, 0, N);
+      for (int e = 0; e < N; ++e) episodes += env.buffers().done(e);
+    }
+    const long allocs = g_allocs.load() - before;
+    INFO(arm_task_name(task) << " episodes " << episodes);
+    CHECK(episodes > 10);
     CHECK(allocs == 0);
   }
 #endif

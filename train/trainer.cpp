@@ -65,11 +65,22 @@ RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* trai
   RunConfig c;
   c.train = train_base ? *train_base : default_train_config();
   if (const auto* t = r.sub("train")) from_json(*t, c.train);
-  c.sac = default_sac_config();
-  if (const auto* s = r.sub("sac")) c.sac = s->get<SacConfig>();
+  const nlohmann::json* s = r.sub("sac");
   const nlohmann::json* e = r.sub("env");
   r.finish();
   validate(c.train);
+  // SAC: global defaults, then the env's own defaults for this algo, then the
+  // file's keys (top-level keys replace, so "target_entropy": null still works).
+  nlohmann::json sac = default_sac_config();
+  if (const auto per_env = env_entry(c.train.env).default_sac) {
+    const nlohmann::json d = per_env(c.train.algo);
+    for (auto it = d.begin(); it != d.end(); ++it) sac[it.key()] = it.value();
+  }
+  if (s) {
+    if (!s->is_object()) throw std::invalid_argument("config section 'sac' must be a JSON object");
+    for (auto it = s->begin(); it != s->end(); ++it) sac[it.key()] = it.value();
+  }
+  c.sac = sac.get<SacConfig>();
   c.env = resolve_env_config(c.train.env, e ? *e : nlohmann::json::object());
   return c;
 }

@@ -25,6 +25,10 @@ struct EnvEntry {
   bool supports_atacom = false;
   nlohmann::json (*default_config)();
   std::unique_ptr<BatchEnv> (*make)(const nlohmann::json& resolved_config, int num_envs, bool atacom);
+  // Optional per-env SAC settings for an algo ("sac" or "atacom-sac"): a JSON
+  // object of SacConfig keys laid over default_sac_config() before a run
+  // config's own "sac" section (nullptr: the global defaults).
+  nlohmann::json (*default_sac)(const std::string& algo) = nullptr;
 };
 
 // All registered envs (envs/registry.cpp lists them).

@@ -6,6 +6,7 @@
 // [-1, 1]^m, projects it with the batched ATACOM kernel, and steps the inner
 // env with the safe control a. The same inner env runs unwrapped for plain RL.
 #pragma once
+#include <atomic>
 #include <memory>
 
 #include "atacom/env.hpp"
@@ -36,10 +37,11 @@ class SafeEnv final : public BatchEnv {
   void step(const double* alpha) override;
   void save_state(std::ostream& out) const override { inner_->save_state(out); }
   void load_state(std::istream& in) override;
-  // Profiling is the inner env's (the projection is not split out).
-  std::vector<std::string> profile_sections() const override { return inner_->profile_sections(); }
-  void set_profiling(bool on) override { inner_->set_profiling(on); }
-  std::vector<double> profile_seconds() const override { return inner_->profile_seconds(); }
+  // Profiling: the inner env's sections plus "projector" (constraint_model +
+  // projection), all in thread-seconds.
+  std::vector<std::string> profile_sections() const override;
+  void set_profiling(bool on) override;
+  std::vector<double> profile_seconds() const override;
 
   const ControlAffineEnv& inner() const { return *inner_; }
   ControlAffineEnv& inner() { return *inner_; }
@@ -53,6 +55,8 @@ class SafeEnv final : public BatchEnv {
   ProjectorBatch pb_;
   EnvSpec spec_;
   int inner_info_ = 0;
+  bool profiling_ = false;
+  std::atomic<int64_t> projector_ns_{0};
 };
 
 }  // namespace atacom

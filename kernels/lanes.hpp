@@ -1,0 +1,88 @@
+// SIMD across envs: a "lane block" holds kLanes envs, one per vector lane.
+//
+// Internal to kernels/: GCC vector extensions, so kernel code reads like
+// scalar code and compiles to AVX-512 (8 doubles) with -march=native, or to
+// narrower vectors elsewhere. Every operation is a plain IEEE double
+// operation per lane (no FMA contraction in ISO mode, no fast-math), so a lane
+// computes bit-for-bit what the same expression computes on a double.
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
+namespace atacom::lanes {
+
+constexpr int kLanes = 8;
+typedef double vd __attribute__((vector_size(kLanes * sizeof(double))));
+typedef int64_t vm __attribute__((vector_size(kLanes * sizeof(int64_t))));  // lane masks (-1 / 0)
+
+// Unaligned whole-vector load/store (a 64-byte memcpy would be split into
+// 256-bit moves through the stack, which defeats store-to-load forwarding).
+typedef double vd_unaligned __attribute__((vector_size(kLanes * sizeof(double)), aligned(alignof(double))));
+static inline vd load(const double* p) { return *reinterpret_cast<const vd_unaligned*>(p); }
+static inline void store(double* p, vd v) { *reinterpret_cast<vd_unaligned*>(p) = v; }
+
+static inline vd splat(double x) { return vd{} + x; }
+static inline vd vmin(vd a, vd b) { return a < b ? a : b; }
+static inline vd vmax(vd a, vd b) { return a > b ? a : b; }
+static inline vd vabs(vd a) { return a < 0.0 ? -a : a; }
+static inline vd vsel(vm m, vd a, vd b) { return m ? a : b; }
+static inline vd vclamp(vd x, double lo, double hi) { return vmin(vmax(x, splat(lo)), splat(hi)); }
+static inline vd vsqrt(vd x) {
+#if defined(__AVX512F__)
+  return (vd)_mm512_maskz_sqrt_pd(0xFF, (__m512d)x);  // correctly rounded, same as std::sqrt per lane
+#else
+  vd r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
+  return r;
+#endif
+}
+static inline bool any(vm m) {
+  int64_t acc = 0;
+  for (int l = 0; l < kLanes; ++l) acc |= m[l];
+  return acc != 0;
+}
+
+// sin and cos of every lane, accurate to a few ulp for |x| < 1e5.
+// Range reduction by k = round(x / (pi/2)) with pi/2 split into three parts
+// (each product k * part is exact), then Taylor series to degree 17/18 on
+// |r| <= pi/4 (truncation error < 1e-19) and quadrant selection.
+static inline void vsincos(vd x, vd& s, vd& c) {
+  constexpr double kTwoOverPi = 0.6366197723675814;
+  constexpr double kPio2Hi = 1.5707963705062866;       // float-rounded pi/2
+  constexpr double kPio2Mid = -4.371138828673793e-08;  // float-rounded remainder
+  constexpr double kPio2Lo = -1.7151244994428829e-15;  // rest
+  constexpr double kRound = 6755399441055744.0;        // 1.5 * 2^52: x + kRound - kRound rounds to an integer
+  const vd kf = (x * kTwoOverPi + kRound) - kRound;
+  const vd r = ((x - kf * kPio2Hi) - kf * kPio2Mid) - kf * kPio2Lo;
+  const vm k = __builtin_convertvector(kf, vm);
+  const vd r2 = r * r;
+  // 1/n! for the odd and even powers.
+  const vd ps = r + r * r2 *
+      (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 + r2 * (-1.0 / 39916800 +
+      r2 * (1.0 / 6227020800.0 + r2 * (-1.0 / 1307674368000.0 + r2 * (1.0 / 355687428096000.0))))))));
+  const vd pc = 1.0 + r2 *
+      (-0.5 + r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 + r2 * (-1.0 / 3628800 +
+      r2 * (1.0 / 479001600.0 + r2 * (-1.0 / 87178291200.0 + r2 * (1.0 / 20922789888000.0 +
+      r2 * (-1.0 / 6402373705728000.0)))))))));
+  const vm odd = (k & 1) != 0;
+  vd ss = vsel(odd, pc, ps);
+  vd cc = vsel(odd, ps, pc);
+  ss = vsel((k & 2) != 0, -ss, ss);
+  cc = vsel(((k + 1) & 2) != 0, -cc, cc);
+  s = ss;
+  c = cc;
+}
+
+// Gather lane l of a lane array from/to row-major per-env storage.
+static inline vd load_strided(const double* base, int stride, int count) {
+  vd v = vd{};
+  for (int l = 0; l < kLanes; ++l) v[l] = base[(l < count ? l : count - 1) * stride];
+  return v;
+}
+
+}  // namespace atacom::lanes

@@ -1,0 +1,50 @@
+// ShelfEnvReal protocol: bookkeeping with trivial policies and the linear
+// attractor with and without ATACOM.
+#include <catch2/catch.hpp>
+
+#include "atacom/shelf_real.hpp"
+
+using namespace atacom;
+
+TEST_CASE("shelf-real protocol: zero policy never succeeds and never collides", "[shelf_real]") {
+  ShelfRealConfig c = default_shelf_real_config();
+  c.trials = 6;
+  c.max_time_per_target = 3.0;
+  c.hold_time = 0.5;
+  const ShelfRealResult r = evaluate_shelf_real(default_arm_env_config(ArmTask::Shelf), c,
+                                                [](const float*, int N, double* a) { std::fill(a, a + N * 7, 0.0); });
+  REQUIRE(r.targets.size() == 2);
+  for (const ShelfRealTarget& t : r.targets) {
+    CHECK(t.success_rate == 0.0);
+    CHECK(t.collisions == 0);
+    CHECK(t.final_error_mean >= default_arm_env_config(ArmTask::Shelf).goal_min_distance - 1e-6);
+  }
+  CHECK(nlohmann::json(r)["targets"][1]["target"] == 2);
+}
+
+TEST_CASE("shelf-real protocol: linear attractor through ATACOM reaches targets safely", "[shelf_real]") {
+  const ArmEnvConfig ec = default_arm_env_config(ArmTask::Shelf);
+  ArmEnv probe(ec, 1);
+  ShelfRealConfig c = default_shelf_real_config();
+  c.trials = 12;
+  c.seed = 4;
+  const ShelfRealResult safe = evaluate_shelf_real(ec, c, make_linear_attractor_policy(probe));
+  CHECK(safe.total_collisions == 0);
+  CHECK(safe.max_constraint_violations == 0);
+  for (const ShelfRealTarget& t : safe.targets) {
+    CHECK(t.success_rate >= 0.5);
+    CHECK(t.time_mean >= c.hold_time);
+    CHECK(t.time_mean <= c.max_time_per_target);
+  }
+  c.atacom = false;
+  const ShelfRealResult raw = evaluate_shelf_real(ec, c, make_linear_attractor_policy(probe));
+  CHECK(raw.total_collisions > 0);  // the straight-line attractor drives into the shelf
+}
+
+TEST_CASE("shelf-real protocol rejects bad settings", "[shelf_real]") {
+  ShelfRealConfig c = default_shelf_real_config();
+  c.hold_time = 20.0;
+  CHECK_THROWS_AS(evaluate_shelf_real(default_arm_env_config(ArmTask::Shelf), c,
+                                      [](const float*, int, double*) {}),
+                  std::invalid_argument);
+}
