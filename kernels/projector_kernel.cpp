@@ -199,7 +199,8 @@ void scatter_lanes(const V* src, int count, double* const dst[kLanes]) {
 // Fast path over envs [lo, hi), hi - lo <= kLanes. MC is m when it is a
 // compile-time constant (loops over m then unroll), 0 otherwise.
 template <int MC>
-void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi, LaneScratch& S, bool store_basis) {
+void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi, LaneScratch& S, bool store_basis,
+                   bool store_slack) {
   constexpr int L = kLanes;
   const int m = MC > 0 ? MC : mod.m;
   constexpr int MA = MC > 0 ? MC : 16;  // accumulator capacity
@@ -370,7 +371,7 @@ void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi,
 
   // ---- slack controls u_s = -A^-1 (r + J_G a), into y.
   VI ok = ~VI{};
-  for (int i = 0; i < k; ++i) {
+  for (int i = 0; i < (store_slack ? k : 0); ++i) {
     const V* jg = S.JG + size_t(i) * m;
     V acc = V{};
 #pragma GCC unroll 16
@@ -391,14 +392,17 @@ void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi,
     double* dst[L];
     for (int l = 0; l < L; ++l) dst[l] = B.a.data() + size_t(lo + l) * m;
     scatter_lanes(S.a, m, dst);
-    for (int l = 0; l < L; ++l) dst[l] = B.slack_u.data() + size_t(lo + l) * k;
-    scatter_lanes(S.y, k, dst);
-    for (int l = 0; l < L; ++l) dst[l] = B.s.data() + size_t(lo + l) * k;
-    scatter_lanes(S.s, k, dst);
+    if (store_slack) {
+      for (int l = 0; l < L; ++l) dst[l] = B.slack_u.data() + size_t(lo + l) * k;
+      scatter_lanes(S.y, k, dst);
+      for (int l = 0; l < L; ++l) dst[l] = B.s.data() + size_t(lo + l) * k;
+      scatter_lanes(S.s, k, dst);
+    }
   } else {
     for (int l = 0; l < valid; ++l) {
       const size_t e = size_t(lo + l);
       for (int j = 0; j < m; ++j) B.a[e * m + j] = S.a[j][l];
+      if (!store_slack) continue;
       for (int i = 0; i < k; ++i) B.slack_u[e * k + i] = S.y[i][l];
       for (int i = 0; i < k; ++i) B.s[e * k + i] = S.s[i][l];
     }
@@ -423,7 +427,7 @@ void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi,
   }
 }
 
-using LaneFn = void (*)(const ProjectorModel&, ProjectorBatch&, int, int, LaneScratch&, bool);
+using LaneFn = void (*)(const ProjectorModel&, ProjectorBatch&, int, int, LaneScratch&, bool, bool);
 
 // Compile-time m for the common action dimensions; dynamic beyond.
 LaneFn lane_kernel_for(int m) {
@@ -526,10 +530,11 @@ bool psd_function(GeneralScratch& W, const Eigen::MatrixXd& X, double rel, bool 
   return loss;
 }
 
-void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, GeneralScratch& W, bool store_basis) {
+void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, GeneralScratch& W, bool store_basis,
+                         bool store_slack) {
   using RowMap = Eigen::Map<const GeneralScratch::RowMat>;
   using VecMap = Eigen::Map<const Eigen::VectorXd>;
-  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p, ke = W.ke, ki = k - ke;
+  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p, ke = W.ke;
   uint32_t status = 0;
   const double* al = B.alpha.data() + size_t(e) * m;
   for (int j = 0; j < m; ++j) {
@@ -547,7 +552,9 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
   if (p > 0) W.F.noalias() += RowMap(B.Jx.data() + size_t(e) * k * p, k, p) * VecMap(B.xdot.data() + size_t(e) * p, p);
 
   const double* c = B.c.data() + size_t(e) * k;
-  double* s_out = B.s.data() + size_t(e) * k;
+  double s_dummy = 0.0;  // slack outputs not stored: write into a sink
+  double* s_out = store_slack ? B.s.data() + size_t(e) * k : nullptr;
+  auto s_at = [&](int i) -> double& { return s_out ? s_out[i] : s_dummy; };
   // QR of [I, 0; A^-1 J_I, A^-1 r_I]: its R holds R with I + J_I^T W J_I =
   // R^T R in the first m columns and z with J_I^T W r_I = R^T z in the last,
   // without forming the products (as in the fast path).
@@ -555,14 +562,14 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
   W.stack.topLeftCorner(m, m).setIdentity();
   for (int i = 0, ie = 0, ii = 0; i < k; ++i) {
     if (mod.equality[i]) {
-      s_out[i] = 0.0;
+      s_at(i) = 0.0;
       W.r(i) = W.F(i) + mod.K_c * c[i];
       W.JE.row(ie) = W.JG.row(i);
       W.rE(ie++) = W.r(i);
       continue;
     }
     const double s = slack_value(c[i], mod.tol[i]);
-    s_out[i] = s;
+    s_at(i) = s;
     W.rate(i) = slack_rate(mod.slack[i], s, mod.beta[i], mod.tol[i]);
     W.r(i) = W.F(i) + mod.K_c * (c[i] + s);
     W.stack.row(m + ii).head(m) = W.JG.row(i) / W.rate(i);
@@ -570,7 +577,7 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
   }
 
   double* a_out = B.a.data() + size_t(e) * m;
-  double* us_out = B.slack_u.data() + size_t(e) * k;
+  double* us_out = store_slack ? B.slack_u.data() + size_t(e) * k : nullptr;
   const bool model_ok = W.stack.allFinite() && W.r.allFinite() && W.JE.allFinite();
   if (model_ok) {
     W.qr.compute(W.stack);
@@ -611,7 +618,7 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
     if (bias_out) status |= kStatusBiasOutOfBounds;
     W.a = W.b + lam * W.t;
     bool ok = W.a.allFinite();
-    for (int i = 0; i < k; ++i) {
+    for (int i = 0; i < (us_out ? k : 0); ++i) {
       if (mod.equality[i]) { us_out[i] = 0.0; continue; }
       us_out[i] = -(W.r(i) + W.JG.row(i).dot(W.a)) / W.rate(i);
       ok = ok && finite(us_out[i]);
@@ -625,9 +632,8 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
       return;
     }
   }
-  (void)ki;
   for (int j = 0; j < m; ++j) a_out[j] = 0.0;
-  for (int i = 0; i < k; ++i) us_out[i] = 0.0;
+  for (int i = 0; i < (us_out ? k : 0); ++i) us_out[i] = 0.0;
   B.lambda[e] = 0.0;
   B.status[e] = status | kStatusModelNonFinite;
   if (store_basis) std::fill_n(B.Na.data() + size_t(e) * m * m, size_t(m) * m, 0.0);
@@ -656,11 +662,11 @@ void project_range(const ProjectorModel& mod, ProjectorBatch& B, int begin, int 
     scratch.setup(mod);
     LaneFn fn = lane_kernel_for(mod.m);
     if (!fn) fn = project_lanes<0>;
-    for (int lo = begin; lo < end; lo += kLanes) fn(mod, B, lo, std::min(lo + kLanes, end), scratch, opt.store_basis);
+    for (int lo = begin; lo < end; lo += kLanes) fn(mod, B, lo, std::min(lo + kLanes, end), scratch, opt.store_basis, opt.store_slack);
   } else {
     thread_local GeneralScratch scratch;
     scratch.setup(mod);
-    for (int e = begin; e < end; ++e) project_general_one(mod, B, e, scratch, opt.store_basis);
+    for (int e = begin; e < end; ++e) project_general_one(mod, B, e, scratch, opt.store_basis, opt.store_slack);
   }
 }
 

@@ -57,7 +57,9 @@ void SafeEnv::step(const double* alpha) {
   parallel_blocks(N, kBlock, [&](int64_t lo, int64_t hi) {
     const auto t0 = profiling_ ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
     inner_->constraint_model(pb_, static_cast<int>(lo), static_cast<int>(hi));
-    project_range(model_, pb_, static_cast<int>(lo), static_cast<int>(hi));
+    // The env only needs a (and lambda/status); skipping the slack outputs
+    // saves a fifth of the kernel's memory traffic.
+    project_range(model_, pb_, static_cast<int>(lo), static_cast<int>(hi), {.store_slack = false});
     if (profiling_)
       projector_ns_.fetch_add(
           std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count(),

@@ -384,3 +384,24 @@ TEST_CASE("projector: model validation and JSON round trip", "[projector]") {
   B.c.resize(1);
   CHECK_THROWS_WITH(project_batch(mod, B), Catch::Contains("sizes"));
 }
+
+TEST_CASE("projector: skipping the slack outputs changes nothing else", "[projector]") {
+  Rng rng(8, 8);
+  for (int variant = 0; variant < 3; ++variant) {
+    ProjectorModel mod = default_projector_model(7, 7, 20, 2);
+    if (variant == 1) mod.basis = BasisType::Smooth;
+    if (variant == 2) mod.equality[3] = 1;
+    ProjectorBatch full(mod, 21);
+    for (int e = 0; e < 21; ++e) fill_random(mod, full, e, rng);
+    ProjectorBatch lean = full;
+    std::fill(lean.s.begin(), lean.s.end(), -7.0);
+    std::fill(lean.slack_u.begin(), lean.slack_u.end(), -7.0);
+    project_batch(mod, full);
+    project_batch(mod, lean, {.store_slack = false});
+    CHECK(full.a == lean.a);
+    CHECK(full.lambda == lean.lambda);
+    CHECK(full.status == lean.status);
+    for (double v : lean.s) CHECK(v == -7.0);
+    for (double v : lean.slack_u) CHECK(v == -7.0);
+  }
+}

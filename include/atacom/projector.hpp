@@ -106,6 +106,8 @@ struct ProjectorBatch {
 
 struct ProjectOptions {
   bool store_basis = false;   // write Na (tests and the filter's diagnostics)
+  bool store_slack = true;    // write s and slack_u; envs that only need a skip them
+                              // (the kernel is memory-bound at large N: ~20% less traffic)
   bool parallel = true;       // TBB over blocks; false runs on the calling thread
 };
 
