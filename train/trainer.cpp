@@ -96,6 +96,7 @@ std::vector<std::string> progress_columns(const std::vector<std::string>& info_n
   cols.insert(cols.end(), info_names.begin(), info_names.end());
   cols.push_back("early_terminations");
   cols.push_back("avg_episode_steps");
+  cols.push_back("violations");
   return cols;
 }
 
@@ -208,6 +209,7 @@ struct ObsNorm {
 struct Counters {
   int64_t env_steps = 0, updates = 0, next_eval = 0, next_ckpt = 0;
   int64_t train_episodes = 0, train_terminations = 0;
+  int64_t train_violations = 0;  // env-steps with some constraint row above its tolerance
   double budget = 0, wall_s = 0;
   // since the last evaluation
   int64_t n_critic = 0, n_actor = 0, recent_returns = 0;
@@ -220,11 +222,20 @@ struct Counters {
     f(env_steps); f(updates); f(next_eval); f(next_ckpt); f(train_episodes); f(train_terminations);
     f(budget); f(wall_s); f(n_critic); f(n_actor); f(recent_returns); f(critic_loss); f(actor_loss);
     f(alpha_loss); f(entropy); f(q_mean); f(recent_return_sum); f(last_train_return); f(progress_bytes);
+    f(train_violations);
   }
 };
 
 class Run {
  public:
+  // Does env i's state violate some constraint row beyond its stated tolerance?
+  bool violated(const EnvBuffers& b, int i) const {
+    const int k = spec_.num_constraints;
+    for (int r = 0; r < k; ++r)
+      if (b.constraints[size_t(i) * k + r] > spec_.constraint_tolerance[size_t(r)]) return true;
+    return false;
+  }
+
   Run(const RunConfig& cfg, const TrainOptions& opts);
   TrainSummary go();
 
@@ -272,6 +283,7 @@ class Run {
   std::vector<double> eact_, eret_, einfo_;
   std::vector<int> elen_;
   std::vector<uint8_t> edone_, eterm_;
+  std::vector<int32_t> eviol_;  // (eval episodes) steps with a constraint row above its tolerance
 };
 
 Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts) {
@@ -310,6 +322,7 @@ Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts
   elen_.assign(size_t(M), 0);
   edone_.assign(size_t(M), 0);
   eterm_.assign(size_t(M), 0);
+  eviol_.assign(size_t(M), 0);
   env_->seed(uint64_t(t.seed));
   norm_.apply(env_->buffers().obs.data(), obs_.data(), N_);
   counters_.next_eval = t.eval_every;
@@ -343,6 +356,7 @@ void Run::step_and_learn() {
   for (int i = 0; i < N_; ++i) {
     for (int c = 0; c < ninfo_; ++c)
       if (spec_.info_reduce[size_t(c)] == InfoReduce::Sum) train_info_sums_[size_t(c)] += b.info[size_t(i) * ninfo_ + c];
+    counters_.train_violations += violated(b, i);
     if (b.done(i)) {
       ++counters_.train_episodes;
       if (b.terminated[size_t(i)]) ++counters_.train_terminations;
@@ -383,6 +397,7 @@ EvalResult Run::evaluate() {
   std::fill(elen_.begin(), elen_.end(), 0);
   std::fill(edone_.begin(), edone_.end(), 0);
   std::fill(eterm_.begin(), eterm_.end(), 0);
+  std::fill(eviol_.begin(), eviol_.end(), 0);
   for (int i = 0; i < M; ++i)
     for (int c = 0; c < ninfo_; ++c)
       einfo_[size_t(i) * ninfo_ + c] =
@@ -398,6 +413,7 @@ EvalResult Run::evaluate() {
       if (edone_[size_t(i)]) continue;
       eret_[size_t(i)] += b.reward[size_t(i)];
       ++elen_[size_t(i)];
+      eviol_[size_t(i)] += violated(b, i);
       for (int c = 0; c < ninfo_; ++c) {
         double& acc = einfo_[size_t(i) * ninfo_ + c];
         const double v = b.info[size_t(i) * ninfo_ + c];
@@ -423,6 +439,7 @@ EvalResult Run::evaluate() {
     s += eret_[size_t(i)];
     len += elen_[size_t(i)];
     r.early_terminations += eterm_[size_t(i)];
+    r.violations += double(eviol_[size_t(i)]) / M;
     for (int c = 0; c < ninfo_; ++c) {
       double v = einfo_[size_t(i) * ninfo_ + c];
       if (spec_.info_reduce[size_t(c)] == InfoReduce::Mean) v /= std::max(1, elen_[size_t(i)]);
@@ -450,6 +467,7 @@ void Run::write_progress_row(const EvalResult& ev) {
   row.insert(row.end(), ev.info.begin(), ev.info.end());
   row.push_back(ev.early_terminations);
   row.push_back(ev.avg_episode_steps);
+  row.push_back(ev.violations);
   std::string line;
   for (size_t k = 0; k < row.size(); ++k) {
     if (k) line += ',';
@@ -578,11 +596,18 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
                       {"alpha", jnum(sac_->alpha())}, {"early_terminations", ev.early_terminations},
                       {"avg_episode_steps", ev.avg_episode_steps}, {"train_episodes", counters_.train_episodes},
                       {"train_terminations", counters_.train_terminations},
+                      {"violations", ev.violations}, {"train_violations", counters_.train_violations},
                       {"agent_hash", hex(sac_->state_hash())}};
   for (int c = 0; c < ninfo_; ++c) {
-    s[spec_.info_names[size_t(c)]] = jnum(ev.info[size_t(c)]);
-    if (spec_.info_reduce[size_t(c)] == InfoReduce::Sum)
-      s["train_" + spec_.info_names[size_t(c)]] = jnum(train_info_sums_[size_t(c)]);
+    const std::string& name = spec_.info_names[size_t(c)];
+    s[name] = jnum(ev.info[size_t(c)]);
+    if (spec_.info_reduce[size_t(c)] == InfoReduce::Sum) s["train_" + name] = jnum(train_info_sums_[size_t(c)]);
+    // Collision counts also under the plural names the rollout command and
+    // the issues use: collisions, wall_collisions, train_collisions, ...
+    if (name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0) {
+      s[name + "s"] = jnum(ev.info[size_t(c)]);
+      if (spec_.info_reduce[size_t(c)] == InfoReduce::Sum) s["train_" + name + "s"] = jnum(train_info_sums_[size_t(c)]);
+    }
   }
   return s;
 }

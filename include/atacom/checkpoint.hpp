@@ -17,7 +17,7 @@
 
 namespace atacom {
 
-constexpr uint32_t kCheckpointVersion = 1;
+constexpr uint32_t kCheckpointVersion = 2;  // 2: trainer counters gained train_violations
 
 struct Checkpoint {
   nlohmann::json manifest;

@@ -55,6 +55,7 @@ struct EvalResult {
   int episodes = 0;
   int early_terminations = 0;     // episodes that ended terminated (not truncated)
   double avg_episode_steps = 0;
+  double violations = 0;          // steps per episode with a constraint row above its tolerance
   std::vector<double> info;       // per info column: reduced per episode, averaged over episodes
 };
 
