@@ -298,3 +298,26 @@ TEST_CASE("trainer: atacom-sac through SafeEnv on nav, resumed bitwise", "[train
   fs::remove_all(full);
   fs::remove_all(part);
 }
+
+TEST_CASE("trainer: a run's policy loads from its directory and acts like the trained agent", "[trainer]") {
+  const std::string dir = tmp_dir("policy");
+  const auto s = train(small_run(600), dir);
+  const auto policy = atacom::TrainedPolicy::load(dir);
+  REQUIRE(policy->obs_dim() == 3);
+  REQUIRE(policy->act_dim() == 1);
+  // Deterministic: the same observations give the same actions, inside [-1, 1].
+  const std::vector<float> obs = {1.0f, 0.0f, 0.5f, 0.0f, 1.0f, -2.0f, -1.0f, 0.0f, 7.0f};
+  std::vector<double> a1(3), a2(3);
+  policy->act(obs.data(), 3, a1.data());
+  policy->act(obs.data(), 3, a2.data());
+  CHECK(a1 == a2);
+  for (double v : a1) CHECK(std::abs(v) <= 1.0);
+  // A second load gives the same agent.
+  std::vector<double> a3(3);
+  atacom::TrainedPolicy::load(dir)->act(obs.data(), 3, a3.data());
+  CHECK(a1 == a3);
+  CHECK_THROWS_WITH(atacom::TrainedPolicy::load(dir + "_missing"), Catch::Contains("config.json"));
+  std::ofstream(dir + "/checkpoint.bin", std::ios::trunc) << "garbage";
+  CHECK_THROWS(atacom::TrainedPolicy::load(dir));
+  fs::remove_all(dir);
+}

@@ -685,3 +685,60 @@ TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts) {
 }
 
 }  // namespace atacom
+
+namespace atacom {
+
+struct TrainedPolicy::Impl {
+  std::unique_ptr<Sac> sac;
+  ObsNorm norm;
+  std::vector<float> nobs;  // (N x obs_dim) normalised observations
+  std::vector<Rng> rngs;    // unused by the mean action, required by Sac::act
+};
+
+TrainedPolicy::~TrainedPolicy() = default;
+int TrainedPolicy::obs_dim() const { return impl_->sac->obs_dim(); }
+int TrainedPolicy::act_dim() const { return impl_->sac->act_dim(); }
+
+std::unique_ptr<TrainedPolicy> TrainedPolicy::load(const std::string& run_dir) {
+  const fs::path dir(run_dir);
+  std::ifstream cf(dir / "config.json");
+  if (!cf) throw std::runtime_error("no config.json in run directory '" + run_dir + "'");
+  nlohmann::json file;
+  try {
+    file = nlohmann::json::parse(cf);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error("config.json in '" + run_dir + "' is not valid JSON: " + e.what());
+  }
+  std::unique_ptr<TrainedPolicy> tp(new TrainedPolicy());
+  tp->cfg_ = resolve_run_config(file);
+  tp->impl_ = std::make_unique<Impl>();
+  const TrainConfig& t = tp->cfg_.train;
+  // The env as training built it (ATACOM adds info columns), for the spec only.
+  const auto env = make_env(EnvRequest{t.env, 1, t.algo == "atacom-sac", tp->cfg_.env});
+  const EnvSpec& spec = env->spec();
+  tp->impl_->norm.init(spec, tp->cfg_.sac.obs_norm);
+  tp->impl_->sac = std::make_unique<Sac>(spec.obs_dim, spec.act_dim, tp->cfg_.sac, uint64_t(t.seed));
+  const Checkpoint ck = read_checkpoint((dir / "checkpoint.bin").string());
+  std::istringstream p(ck.payload);
+  try {
+    bin::expect_tag(p, kTagCounters, "counters");
+    Counters counters;
+    counters.visit([&](auto& x) { x = bin::read_pod<std::decay_t<decltype(x)>>(p, "counters"); });
+    std::vector<double> sums;
+    bin::read_vec(p, sums, "train_info_sums", int64_t(spec.info_names.size()));
+    tp->impl_->sac->load(p);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("checkpoint in '" + run_dir + "' does not hold this run's agent: " + e.what());
+  }
+  return tp;
+}
+
+void TrainedPolicy::act(const float* obs, int N, double* actions) {
+  Impl& m = *impl_;
+  m.nobs.resize(size_t(N) * m.sac->obs_dim());
+  if (m.rngs.size() != size_t(N)) m.rngs.assign(size_t(N), Rng(0, 0));
+  m.norm.apply(obs, m.nobs.data(), N);
+  m.sac->act(m.nobs.data(), N, true, m.rngs.data(), actions);
+}
+
+}  // namespace atacom

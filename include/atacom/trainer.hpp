@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -80,6 +81,29 @@ struct TrainSummary {
 // Runs (or resumes) training into opts.out_dir. Throws std::invalid_argument
 // on bad configs or an unusable directory, before doing any work.
 TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts);
+
+// The policy of a finished (or checkpointed) run, loaded from its directory
+// (config.json + checkpoint.bin): the actor with the run's observation
+// normalisation, acting with its mean action. For evaluation protocols
+// (e.g. `atacom shelf-real --run DIR`) and deployment.
+class TrainedPolicy {
+ public:
+  // Throws std::runtime_error naming the problem (missing files, corrupt or
+  // mismatching checkpoint).
+  static std::unique_ptr<TrainedPolicy> load(const std::string& run_dir);
+  ~TrainedPolicy();
+  // obs: (N x obs_dim) raw env observations; actions: (N x act_dim) in [-1, 1].
+  void act(const float* obs, int N, double* actions);
+  const RunConfig& config() const { return cfg_; }
+  int obs_dim() const;
+  int act_dim() const;
+
+ private:
+  TrainedPolicy() = default;
+  struct Impl;
+  RunConfig cfg_;
+  std::unique_ptr<Impl> impl_;
+};
 
 // Column names of progress.csv for an env with these info columns.
 std::vector<std::string> progress_columns(const std::vector<std::string>& info_names);
