@@ -106,15 +106,18 @@ int main(int argc, char** argv) {
             const double wall = bench::now_s() - t0;
             const std::vector<double> secs = run.env->profile_seconds();
             run.env->set_profiling(false);
-            const int used_threads = std::min(threads, std::max(1, (N + kBlockEnvs - 1) / kBlockEnvs));
+            double accounted = 0.0;
+            for (size_t i = 0; i < sections.size() && i < secs.size(); ++i)
+              if (sections[i] != "rest") accounted += secs[i];
+            // Threads in use: envs with smaller blocks than kBlockEnvs (nav
+            // steps 64 worlds per task) keep more threads busy than N / 256
+            // suggests; the sections' own thread-seconds then tell.
+            int used_threads = std::min(threads, std::max(1, (N + kBlockEnvs - 1) / kBlockEnvs));
+            if (accounted > wall * used_threads) used_threads = threads;
             const double thread_time = wall * used_threads;
             nlohmann::json split = nlohmann::json::object();
-            double accounted = 0.0;
-            for (size_t i = 0; i < sections.size() && i < secs.size(); ++i) {
-              if (sections[i] == "rest") continue;  // recomputed below from the total
-              split[sections[i]] = secs[i] / thread_time;
-              accounted += secs[i];
-            }
+            for (size_t i = 0; i < sections.size() && i < secs.size(); ++i)
+              if (sections[i] != "rest") split[sections[i]] = secs[i] / thread_time;
             split["rest"] = std::max(0.0, 1.0 - accounted / thread_time);
             bench::emit({{"bench", "env_step"},
                          {"env", name},

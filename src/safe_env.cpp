@@ -66,18 +66,22 @@ void SafeEnv::step(const double* alpha) {
           std::memory_order_relaxed);
   });
   inner_->step(pb_.a.data());
-  mirror_buffers();
+  // Mirror the inner buffers and fill ATACOM's info columns block-parallel
+  // (a serial copy was about a tenth of the step at N = 4096).
   const int k = model_.k;
   const size_t ni = spec_.info_names.size();
-  for (int i = 0; i < N; ++i) {
-    float* info = buffers_.info.data() + size_t(i) * ni + inner_info_;
-    info[0] = static_cast<float>(pb_.lambda[i]);
-    info[1] = (pb_.status[i] & (kStatusBiasOutOfBounds | kStatusModelNonFinite)) ? 1.0f : 0.0f;
-    const double* c = buffers_.constraints.data() + size_t(i) * k;
-    double mx = k ? c[0] : 0.0;
-    for (int r = 1; r < k; ++r) mx = std::max(mx, c[r]);
-    info[2] = static_cast<float>(mx);
-  }
+  parallel_blocks(N, kBlock, [&](int64_t lo, int64_t hi) {
+    mirror_rows(static_cast<int>(lo), static_cast<int>(hi));
+    for (int64_t i = lo; i < hi; ++i) {
+      float* info = buffers_.info.data() + size_t(i) * ni + inner_info_;
+      info[0] = static_cast<float>(pb_.lambda[i]);
+      info[1] = (pb_.status[i] & (kStatusBiasOutOfBounds | kStatusModelNonFinite)) ? 1.0f : 0.0f;
+      const double* c = buffers_.constraints.data() + size_t(i) * k;
+      double mx = k ? c[0] : 0.0;
+      for (int r = 1; r < k; ++r) mx = std::max(mx, c[r]);
+      info[2] = static_cast<float>(mx);
+    }
+  });
 }
 
 std::vector<std::string> SafeEnv::profile_sections() const {
@@ -99,20 +103,26 @@ std::vector<double> SafeEnv::profile_seconds() const {
   return s;
 }
 
-void SafeEnv::mirror_buffers() {
+void SafeEnv::mirror_buffers() { mirror_rows(0, inner_->num_envs()); }
+
+void SafeEnv::mirror_rows(int lo, int hi) {
   const EnvBuffers& in = inner_->buffers();
   EnvBuffers& out = buffers_;
-  out.obs = in.obs;
-  out.final_obs = in.final_obs;
-  out.reward = in.reward;
-  out.cost = in.cost;
-  out.terminated = in.terminated;
-  out.truncated = in.truncated;
-  out.constraints = in.constraints;
-  out.episode_return = in.episode_return;
-  out.episode_length = in.episode_length;
+  auto rows = [lo, hi](const auto& src, auto& dst, size_t width) {
+    std::copy(src.begin() + size_t(lo) * width, src.begin() + size_t(hi) * width, dst.begin() + size_t(lo) * width);
+  };
+  const size_t d = static_cast<size_t>(spec_.obs_dim), k = static_cast<size_t>(spec_.num_constraints);
+  rows(in.obs, out.obs, d);
+  rows(in.final_obs, out.final_obs, d);
+  rows(in.reward, out.reward, 1);
+  rows(in.cost, out.cost, 1);
+  rows(in.terminated, out.terminated, 1);
+  rows(in.truncated, out.truncated, 1);
+  rows(in.constraints, out.constraints, k);
+  rows(in.episode_return, out.episode_return, 1);
+  rows(in.episode_length, out.episode_length, 1);
   const size_t ni = spec_.info_names.size(), nin = static_cast<size_t>(inner_info_);
-  for (int i = 0; i < in.N; ++i)
+  for (int i = lo; i < hi; ++i)
     std::copy_n(in.info.data() + size_t(i) * nin, nin, out.info.data() + size_t(i) * ni);
 }
 

@@ -49,7 +49,8 @@ class SafeEnv final : public BatchEnv {
   const ProjectorBatch& projection() const { return pb_; }  // last step's projector inputs and outputs
 
  private:
-  void mirror_buffers();
+  void mirror_buffers();              // all rows of the inner env's buffers into ours
+  void mirror_rows(int lo, int hi);   // rows [lo, hi)
   std::unique_ptr<ControlAffineEnv> inner_;
   ProjectorModel model_;
   ProjectorBatch pb_;
