@@ -1,3 +1,4 @@
+#include "atacom/config_json.hpp"
 #include "atacom/arm_env.hpp"
 
 #include <algorithm>
@@ -35,16 +36,6 @@ enum InfoCol : int {
   kInfoCount
 };
 
-void check_keys(const json& j, std::initializer_list<const char*> keys, const std::string& where) {
-  if (!j.is_object()) throw std::invalid_argument(where + " must be a JSON object");
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    bool known = false;
-    for (const char* k : keys) known = known || it.key() == k;
-    if (!known) throw std::invalid_argument("unknown key '" + it.key() + "' in " + where);
-  }
-  for (const char* k : keys)
-    if (!j.contains(k)) throw std::invalid_argument("missing key '" + std::string(k) + "' in " + where);
-}
 
 double num(const json& j, const std::string& what) {
   if (!j.is_number()) throw std::invalid_argument(what + " must be a number");
@@ -66,7 +57,7 @@ json group_json(const ArmRowGroup& g) {
 }
 
 ArmRowGroup read_group(const json& j, size_t rows, const std::string& what) {
-  check_keys(j, {"margin", "beta", "slack_tol", "tolerance"}, what);
+  require_exact_keys(j, {"margin", "beta", "slack_tol", "tolerance"}, what);
   ArmRowGroup g;
   g.margin = num_array(j.at("margin"), rows, what + ".margin");
   g.beta = num_array(j.at("beta"), rows, what + ".beta");
@@ -187,7 +178,7 @@ void to_json(json& j, const ArmEnvConfig& c) {
 }
 
 void from_json(const json& j, ArmEnvConfig& c) {
-  check_keys(j, {"torso_lift", "dt", "horizon", "velocity_scale", "scene", "reward", "constraints", "init_margin",
+  require_exact_keys(j, {"torso_lift", "dt", "horizon", "velocity_scale", "scene", "reward", "constraints", "init_margin",
                  "sample_batches", "goal_min_distance", "goal_library_size", "goal_library_seed", "goal_jitter",
                  "home"},
              "arm env config");
@@ -200,7 +191,7 @@ void from_json(const json& j, ArmEnvConfig& c) {
   from_json(j.at("scene"), c.scene);
   c.scene.task = task;
   const json& r = j.at("reward");
-  check_keys(r, {"rho_d", "rho_ang", "rho_a", "indicator", "terminal", "desired_approach"}, "reward");
+  require_exact_keys(r, {"rho_d", "rho_ang", "rho_a", "indicator", "terminal", "desired_approach"}, "reward");
   c.reward.rho_d = num(r.at("rho_d"), "reward.rho_d");
   c.reward.rho_ang = num(r.at("rho_ang"), "reward.rho_ang");
   c.reward.rho_a = num(r.at("rho_a"), "reward.rho_a");
@@ -209,7 +200,7 @@ void from_json(const json& j, ArmEnvConfig& c) {
   const auto d = num_array(r.at("desired_approach"), 3, "reward.desired_approach");
   c.reward.desired_approach = Eigen::Vector3d(d[0], d[1], d[2]);
   const json& k = j.at("constraints");
-  check_keys(k, {"joint", "obstacle", "body", "ground", "ground_poi"}, "constraints");
+  require_exact_keys(k, {"joint", "obstacle", "body", "ground", "ground_poi"}, "constraints");
   c.joint = read_group(k.at("joint"), 2 * kArmJoints, "constraints.joint");
   c.obstacle = read_group(k.at("obstacle"), kArmPoi, "constraints.obstacle");
   c.body = read_group(k.at("body"), kArmPoi, "constraints.body");

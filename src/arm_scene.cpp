@@ -1,3 +1,4 @@
+#include "atacom/config_json.hpp"
 #include "atacom/arm_scene.hpp"
 
 #include <cmath>
@@ -11,16 +12,6 @@ namespace atacom {
 namespace {
 using nlohmann::json;
 
-void check_keys(const json& j, std::initializer_list<const char*> keys, const std::string& where) {
-  if (!j.is_object()) throw std::invalid_argument(where + " must be a JSON object");
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    bool known = false;
-    for (const char* k : keys) known = known || it.key() == k;
-    if (!known) throw std::invalid_argument("unknown key '" + it.key() + "' in " + where);
-  }
-  for (const char* k : keys)
-    if (!j.contains(k)) throw std::invalid_argument("missing key '" + std::string(k) + "' in " + where);
-}
 
 Eigen::Vector3d read_vec3(const json& j, const std::string& what) {
   if (!j.is_array() || j.size() != 3) throw std::invalid_argument(what + " must be an array of 3 numbers");
@@ -38,7 +29,7 @@ json vec_json(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z(
 json box_json(const AlignedBox& b) { return {{"min", vec_json(b.min)}, {"max", vec_json(b.max)}}; }
 
 AlignedBox read_box(const json& j, const std::string& what) {
-  check_keys(j, {"min", "max"}, what);
+  require_exact_keys(j, {"min", "max"}, what);
   AlignedBox b{read_vec3(j.at("min"), what + ".min"), read_vec3(j.at("max"), what + ".max")};
   if (!(b.min.array() < b.max.array()).all()) throw std::invalid_argument(what + ": min must be below max");
   return b;
@@ -116,7 +107,7 @@ void to_json(json& j, const ArmSceneConfig& c) {
 }
 
 void from_json(const json& j, ArmSceneConfig& c) {
-  check_keys(j, {"position", "yaw_deg", "blend", "body_blend", "goal_region", "indicator_region"}, "scene");
+  require_exact_keys(j, {"position", "yaw_deg", "blend", "body_blend", "goal_region", "indicator_region"}, "scene");
   c.position = read_vec3(j.at("position"), "scene.position");
   if (!j.at("yaw_deg").is_number_integer()) throw std::invalid_argument("scene.yaw_deg must be an integer");
   c.yaw_deg = j.at("yaw_deg").get<int>();

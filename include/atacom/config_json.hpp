@@ -5,6 +5,7 @@
 // was not taken. So a typo in a config file is an error, never a silent
 // default.
 #pragma once
+#include <initializer_list>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -14,6 +15,21 @@
 #include <nlohmann/json.hpp>
 
 namespace atacom {
+
+// For configs whose every key is required: throws std::invalid_argument when
+// j is not an object, has a key outside `keys`, or misses one of them
+// (`where` names the section in the message).
+inline void require_exact_keys(const nlohmann::json& j, std::initializer_list<const char*> keys,
+                               const std::string& where) {
+  if (!j.is_object()) throw std::invalid_argument(where + " must be a JSON object");
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    bool known = false;
+    for (const char* k : keys) known = known || it.key() == k;
+    if (!known) throw std::invalid_argument("unknown key '" + it.key() + "' in " + where);
+  }
+  for (const char* k : keys)
+    if (!j.contains(k)) throw std::invalid_argument("missing key '" + std::string(k) + "' in " + where);
+}
 
 class ConfigReader {
  public:
