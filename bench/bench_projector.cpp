@@ -100,5 +100,22 @@ int main(int argc, char** argv) {
                    {"peak_share", per_s * flops * 1e-9 / (peak1 * threads)}});
     }
   }
+  // The smooth (Procrustes) basis and equality rows, k = 34, m = 7, N = 16384,
+  // dense G, all outputs: the smooth basis runs in the lane kernel (Jacobi per
+  // lane), equality rows take the general per-env path.
+  for (int variant = 0; variant < 2; ++variant) {
+    ProjectorModel mod = default_projector_model(7, 7, 34, 0);
+    if (variant == 0) mod.basis = BasisType::Smooth;
+    else mod.equality[0] = mod.equality[1] = 1;
+    ProjectorBatch B(mod, 16384);
+    fill(mod, B, 3);
+    for (int threads : threads_list) {
+      set_num_threads(threads);
+      const double t = bench::best_seconds_per_call([&] { project_batch(mod, B); }, 3, 0.1);
+      bench::emit({{"bench", "projector"}, {"N", 16384}, {"k", 34}, {"m", 7}, {"n", 7}, {"G", "dense"},
+                   {"slack_out", true}, {"threads", threads},
+                   {"variant", variant == 0 ? "smooth_basis" : "equality_rows_2"}, {"per_s", 16384 / t}});
+    }
+  }
   return 0;
 }

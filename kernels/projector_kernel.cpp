@@ -1,6 +1,6 @@
 // Batched ATACOM projector.
 //
-// Fast path (inequality rows, projected basis): blocks of kLanes envs are
+// Fast path (inequality rows): blocks of kLanes envs are
 // transposed into lane-major scratch (element-major, env-minor) so that every
 // arithmetic loop runs over the lanes and vectorises without intrinsics. The
 // (k x k) system of the paper is never formed; with J_G = J_q G and
@@ -14,9 +14,12 @@
 //   k n m (J_G, dense G) + k m (m + 1) (QR and rhs) + k n (u_s = -A^-1 (r +
 //   J_q (G a)), so J_G is never stored) + O(n m + m^2).
 //
-// General path (equality rows or smooth basis): the same m x m algebra per env
-// with Eigen, plus the k_e x k_e Schur complement of the equality rows and,
-// for the smooth basis, N_a^{1/2} (the action block of the Procrustes basis).
+// Smooth basis (no equality rows): the same lane kernel, plus N_a^{1/2} from
+// a per-lane cyclic Jacobi eigen-decomposition of N_a = R^-1 R^-T.
+//
+// General path (equality rows): the same m x m algebra per env with Eigen,
+// plus the k_e x k_e Schur complement of the equality rows and, for the
+// smooth basis, N_a^{1/2} (the action block of the Procrustes basis).
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -64,7 +67,7 @@ inline V vsqrt(V x) {
 // which otherwise dominates the row pass.
 inline V vrecip(V x) {
 #if defined(__AVX512F__)
-  V r = (V)_mm512_rcp14_pd((__m512d)x);
+  V r = (V)_mm512_maskz_rcp14_pd(0xFF, (__m512d)x);  // maskz: no undefined passthrough (GCC 12 warns)
   r = r * (2.0 - x * r);
   r = r * (2.0 - x * r);
   return r;
@@ -159,14 +162,17 @@ struct LaneScratch {
   V* b;     // (m)      -N_a J_G^T W r
   V* t;     // (m)      N_a alpha
   V* a;     // (m)      safe control
+  V* Am;    // (m x m)  smooth basis: N_a, rotated to diagonal by Jacobi
+  V* Vm;    // (m x m)  smooth basis: eigenvectors of N_a (columns)
 
   void setup(const ProjectorModel& mod) {
     if (mod.n == n && mod.m == m && mod.k == k && mod.p == p) return;
     n = mod.n; m = mod.m; k = mod.k; p = mod.p;
     const size_t sizes[] = {size_t(k) * n, size_t(k) * p, size_t(n) * m, size_t(n), size_t(p),
                             size_t(k) * m, size_t(n), size_t(k) * m, size_t(k), size_t(k), size_t(k), size_t(k),
-                            size_t(k), size_t(m) * m, size_t(m), size_t(m), size_t(m), size_t(m), size_t(m), size_t(m)};
-    V** fields[] = {&JqT, &JxT, &GT, &fT, &xdT, &JG, &Ga, &Bw, &inv, &c, &s, &y, &y0, &R, &Rd, &z, &alpha, &b, &t, &a};
+                            size_t(k), size_t(m) * m, size_t(m), size_t(m), size_t(m), size_t(m), size_t(m), size_t(m),
+                            size_t(m) * m, size_t(m) * m};
+    V** fields[] = {&JqT, &JxT, &GT, &fT, &xdT, &JG, &Ga, &Bw, &inv, &c, &s, &y, &y0, &R, &Rd, &z, &alpha, &b, &t, &a, &Am, &Vm};
     static_assert(std::size(sizes) == std::size(fields));
     size_t total = 0;
     for (size_t sz : sizes) total += sz;
@@ -437,8 +443,84 @@ void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi,
     S.t[j] = S.alpha[j];
   }
   solve_R(S.b);
-  solve_RT(S.t);
-  solve_R(S.t);
+  const bool smooth = mod.basis == BasisType::Smooth;
+  if (!smooth) {
+    solve_RT(S.t);
+    solve_R(S.t);
+  } else {
+    // Smooth basis: its action block is T = N_a^{1/2} (docs/projector.md),
+    // from a cyclic Jacobi eigen-decomposition of N_a = R^-1 R^-T run on all
+    // lanes at once (same rotation order, per-lane angles; lanes with
+    // nothing left to rotate get angle 0). Then t = T alpha.
+    V* A = S.Am;
+    V* Q = S.Vm;
+    for (int col = 0; col < m; ++col) {
+      for (int j = 0; j < m; ++j) S.t[j] = splat(j == col ? 1.0 : 0.0);
+      solve_RT(S.t);
+      solve_R(S.t);
+      for (int j = 0; j < m; ++j) A[j * m + col] = S.t[j];
+    }
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < i; ++j) A[i * m + j] = A[j * m + i] = 0.5 * (A[i * m + j] + A[j * m + i]);
+    for (int i = 0; i < m * m; ++i) Q[i] = splat(i % (m + 1) == 0 ? 1.0 : 0.0);
+    for (int sweep = 0; sweep < 50; ++sweep) {
+      V off = V{}, diag = V{};
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < m; ++j) (i == j ? diag : off) += A[i * m + j] * A[i * m + j];
+      // Converged (or non-finite: such lanes are stopped below anyway).
+      const VI done = (off <= 1e-30 * (diag + off)) | ~vfinite(off);
+      bool all_done = true;
+      for (int l = 0; l < L; ++l) all_done = all_done && done[l];
+      if (all_done) break;
+      for (int pp = 0; pp < m - 1; ++pp) {
+        for (int q = pp + 1; q < m; ++q) {
+          const V apq = A[pp * m + q];
+          const VI active = vmax(apq, -apq) > 1e-290;
+          const V theta = (A[q * m + q] - A[pp * m + pp]) * vrecip(active ? 2.0 * apq : splat(1.0));
+          // |theta| capped at 1e150: t below 5e-151 is no rotation either way,
+          // and theta^2 stays finite.
+          const V at = vmin(vmax(theta, -theta), splat(1e150));
+          V t = vrecip(at + vsqrt(at * at + 1.0));
+          t = theta < 0.0 ? -t : t;
+          t = active ? t : V{};
+          const V c = vrecip(vsqrt(t * t + 1.0)), sn = t * c;
+          for (int r = 0; r < m; ++r) {  // A <- J^T A J: columns, then rows
+            const V akp = A[r * m + pp], akq = A[r * m + q];
+            A[r * m + pp] = c * akp - sn * akq;
+            A[r * m + q] = sn * akp + c * akq;
+          }
+          for (int r = 0; r < m; ++r) {
+            const V apk = A[pp * m + r], aqk = A[q * m + r];
+            A[pp * m + r] = c * apk - sn * aqk;
+            A[q * m + r] = sn * apk + c * aqk;
+          }
+          for (int r = 0; r < m; ++r) {
+            const V vkp = Q[r * m + pp], vkq = Q[r * m + q];
+            Q[r * m + pp] = c * vkp - sn * vkq;
+            Q[r * m + q] = sn * vkp + c * vkq;
+          }
+        }
+      }
+    }
+    // sqrt of the eigenvalues; below 1e-13 of the largest they count as 0
+    // (as in the general path). N_a's eigenvalues are in (0, 1].
+    V dmax = V{};
+    for (int j = 0; j < m; ++j) dmax = vmax(dmax, A[j * m + j]);
+    V w[MA];
+    for (int j = 0; j < m; ++j) {
+      const V d = A[j * m + j];
+      const V sd = (d > 1e-13 * dmax) & (d > 0.0) ? vsqrt(vmax(d, V{})) : V{};
+      V acc = V{};
+      for (int r = 0; r < m; ++r) acc += Q[r * m + j] * S.alpha[r];
+      w[j] = acc * sd;
+      A[j * m + j] = sd;  // kept for the basis output
+    }
+    for (int j = 0; j < m; ++j) {
+      V acc = V{};
+      for (int r = 0; r < m; ++r) acc += Q[j * m + r] * w[r];
+      S.t[j] = acc;
+    }
+  }
 
   // ---- lambda: largest scale of the tangential part keeping a in [-1, 1]^m.
   V lam = splat(1.0);
@@ -517,7 +599,15 @@ void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi,
                        (ok[l] ? 0u : kStatusModelNonFinite);
   }
 
-  if (store_basis) {
+  if (store_basis && smooth) {
+    // T = Q diag(sqrt d) Q^T (sqrt d on A's diagonal).
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j) {
+        V acc = V{};
+        for (int r = 0; r < m; ++r) acc += S.Vm[i * m + r] * S.Am[r * m + r] * S.Vm[j * m + r];
+        for (int l = 0; l < hi - lo; ++l) B.Na[size_t(lo + l) * m * m + i * m + j] = acc[l];
+      }
+  } else if (store_basis) {
     // N_a = M^-1 = R^-1 R^-T, one column per unit right-hand side.
     for (int col = 0; col < m; ++col) {
       for (int j = 0; j < m; ++j) S.t[j] = splat(j == col ? 1.0 : 0.0);
@@ -760,7 +850,7 @@ void project_range(const ProjectorModel& mod, ProjectorBatch& B, int begin, int 
   if (opt.store_basis && B.Na.size() != size_t(B.N) * mod.m * mod.m) B.Na.assign(size_t(B.N) * mod.m * mod.m, 0.0);
   // Lane kernels: compile-time m up to 8, dynamic m up to 16 (accumulator
   // capacity); larger m takes the general path.
-  const bool fast = mod.num_equality() == 0 && mod.basis == BasisType::Projected && mod.m <= 16;
+  const bool fast = mod.num_equality() == 0 && mod.m <= 16;
   if (fast) {
     thread_local LaneScratch scratch;
     scratch.setup(mod);

@@ -78,10 +78,14 @@ const Shape kShapes[] = {{1, 1, 1, 0}, {2, 2, 1, 0}, {3, 2, 5, 2}, {4, 2, 3, 0},
 TEST_CASE("projector: fast kernel equals the per-env reference", "[projector]") {
   Rng rng(42, 0);
   for (const Shape& sh : kShapes) {
-    for (int gform = 0; gform < 2; ++gform) {
+    for (int variant = 0; variant < 4; ++variant) {
+      const int gform = variant & 1;
       if (gform == 1 && sh.n != sh.m) continue;
       ProjectorModel mod = random_model(rng, sh);
       mod.g_form = gform ? GForm::Diagonal : GForm::Dense;
+      // Variants 2 and 3: the smooth basis, whose action block N_a^{1/2} the
+      // lane kernel gets from a per-lane Jacobi eigen-decomposition.
+      mod.basis = variant >= 2 ? BasisType::Smooth : BasisType::Projected;
       mod.has_drift = rng.below(2) == 1;
       const int N = 37;  // not a multiple of the lane count: exercises the tail block
       ProjectorBatch B(mod, N);
@@ -92,13 +96,15 @@ TEST_CASE("projector: fast kernel equals the per-env reference", "[projector]") 
       project_batch(mod, B, {.store_basis = true});
       for (int e = 0; e < N; ++e) {
         const ReferenceOutput ref = project_reference(mod, reference_input(mod, B, e));
-        INFO("shape n=" << sh.n << " m=" << sh.m << " k=" << sh.k << " p=" << sh.p << " env " << e);
+        INFO("shape n=" << sh.n << " m=" << sh.m << " k=" << sh.k << " p=" << sh.p << " variant " << variant
+                          << " env " << e);
         const double scale = 1.0 + amax(ref.b.head(sh.m));
         CHECK(max_abs_diff(B.a.data() + size_t(e) * sh.m, ref.a.data(), sh.m) <= 1e-12 * scale);
         CHECK(max_abs_diff(B.s.data() + size_t(e) * sh.k, ref.s.data(), sh.k) == 0.0);
         CHECK(std::abs(B.lambda[e] - ref.lambda) <= 1e-12);
         CHECK(B.status[e] == ref.status);
-        // The action block of the basis: (I + J_G^T A^-2 J_G)^-1 (push-through) == top of N.
+        // The action block of the basis: (I + J_G^T A^-2 J_G)^-1 (push-through) == top of N,
+        // or its square root for the smooth basis.
         Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>> Na(B.Na.data() + size_t(e) * sh.m * sh.m,
                                                                             sh.m, sh.m);
         CHECK(amax(Na - ref.N.topRows(sh.m)) <= 1e-12);
@@ -179,7 +185,7 @@ TEST_CASE("projector: agreement at and beyond the boundary (slack at its floor)"
   }
 }
 
-TEST_CASE("projector: equality rows and the smooth basis (general path) equal the reference", "[projector]") {
+TEST_CASE("projector: equality rows (general path) and the smooth basis equal the reference", "[projector]") {
   Rng rng(3, 3);
   const Shape shapes[] = {{3, 3, 4, 0}, {7, 7, 12, 2}, {4, 2, 3, 1}, {6, 4, 8, 0}};
   for (const Shape& sh : shapes) {
@@ -352,18 +358,21 @@ TEST_CASE("projector: NaN alpha falls back to pure correction, NaN model stops",
 
 TEST_CASE("projector: results do not depend on the thread count", "[projector]") {
   Rng rng(1, 2);
-  ProjectorModel mod = default_projector_model(7, 7, 34, 3);
-  ProjectorBatch B1(mod, 3000);
-  for (int e = 0; e < 3000; ++e) fill_random(mod, B1, e, rng);
-  ProjectorBatch B2 = B1;
-  set_num_threads(1);
-  project_batch(mod, B1);
-  set_num_threads(2);
-  project_batch(mod, B2);
-  set_num_threads(0);
-  CHECK(B1.a == B2.a);
-  CHECK(B1.slack_u == B2.slack_u);
-  CHECK(B1.lambda == B2.lambda);
+  for (int basis = 0; basis < 2; ++basis) {
+    ProjectorModel mod = default_projector_model(7, 7, 34, 3);
+    mod.basis = basis ? BasisType::Smooth : BasisType::Projected;
+    ProjectorBatch B1(mod, 3000);
+    for (int e = 0; e < 3000; ++e) fill_random(mod, B1, e, rng);
+    ProjectorBatch B2 = B1;
+    set_num_threads(1);
+    project_batch(mod, B1);
+    set_num_threads(2);
+    project_batch(mod, B2);
+    set_num_threads(0);
+    CHECK(B1.a == B2.a);
+    CHECK(B1.slack_u == B2.slack_u);
+    CHECK(B1.lambda == B2.lambda);
+  }
 }
 
 TEST_CASE("projector: model validation and JSON round trip", "[projector]") {
