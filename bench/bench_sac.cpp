@@ -21,6 +21,7 @@
 #include "atacom/parallel.hpp"
 #include "atacom/replay_buffer.hpp"
 #include "atacom/sac.hpp"
+#include "bench_common.hpp"
 
 using namespace atacom;
 using Clock = std::chrono::steady_clock;
@@ -85,9 +86,9 @@ void bench_sac_update(int B, int threads) {
   update();
   const double flops = sac.gemm_flops() - f0;
   const double per_s = best_rate(update);
-  std::printf("{\"bench\": \"sac_update\", \"obs\": %d, \"act\": %d, \"hidden\": [256, 256], \"batch\": %d, "
-              "\"threads\": %d, \"per_s\": %.1f, \"flops\": %.0f, \"gflops\": %.2f}\n",
-              D, A, B, threads, per_s, flops, flops * per_s * 1e-9);
+  bench::emit({{"bench", "sac_update"}, {"obs", D}, {"act", A}, {"hidden", {256, 256}}, {"batch", B},
+               {"threads", threads}, {"per_s", per_s}, {"flops", flops}, {"gflops", flops * per_s * 1e-9},
+               {"cpu", bench::cpu_name()}});
   // Updates per second of process CPU time (all threads): robust to other
   // jobs on the machine, and shows the parallel overhead (spinning workers,
   // task spawns) as a drop from the 1-thread figure.
@@ -99,10 +100,9 @@ void bench_sac_update(int B, int threads) {
     ++n;
   }
   const double cpu = cpu_seconds() - c0;
-  std::printf("{\"bench\": \"sac_update_cpu\", \"batch\": %d, \"threads\": %d, \"updates_per_cpu_s\": %.1f, "
-              "\"cpus_used\": %.2f}\n", B, threads, double(n) / cpu,
-              cpu / std::chrono::duration<double>(Clock::now() - w0).count());
-  std::fflush(stdout);
+  // per_s: updates per second of process CPU time.
+  bench::emit({{"bench", "sac_update_cpu"}, {"batch", B}, {"threads", threads}, {"per_s", double(n) / cpu},
+               {"cpus_used", cpu / std::chrono::duration<double>(Clock::now() - w0).count()}});
 }
 
 void bench_actor_act(int N, int threads) {
@@ -117,8 +117,7 @@ void bench_actor_act(int N, int threads) {
   std::vector<double> act(size_t(N) * A);
   const double calls = best_rate([&]() { sac.act(obs.data(), N, false, rngs.data(), act.data()); });
   // obs 20, act 7, hidden 256-256 like sac_update; stochastic actions
-  std::printf("{\"bench\": \"actor_act\", \"N\": %d, \"threads\": %d, \"per_s\": %.0f}\n", N, threads, calls * N);
-  std::fflush(stdout);
+  bench::emit({{"bench", "actor_act"}, {"N", N}, {"threads", threads}, {"per_s", calls * N}});
 }
 
 // Eigen's float GEMM C = A B, one independent product per thread (Eigen
@@ -139,9 +138,10 @@ void bench_gemm_peak(int m, int k, int n, int threads) {
     });
   };
   const double per_s = best_rate(run);
-  std::printf("{\"bench\": \"gemm_peak\", \"m\": %d, \"k\": %d, \"n\": %d, \"threads\": %d, \"gflops\": %.1f}\n", m,
-              k, n, threads, per_s * inner * 2.0 * m * k * n * 1e-9);
-  std::fflush(stdout);
+  // per_s: GEMM calls per second over all threads; gflops: per thread (each
+  // thread runs its own product), comparable with one core's peak.
+  bench::emit({{"bench", "gemm_peak"}, {"m", m}, {"k", k}, {"n", n}, {"threads", threads}, {"per_s", per_s * inner * threads},
+               {"gflops", per_s * inner * 2.0 * m * k * n * 1e-9}});
 }
 
 }  // namespace
