@@ -1,6 +1,7 @@
 #include "atacom/adam.hpp"
 
 #include <cmath>
+#include <limits>
 #include <istream>
 #include <ostream>
 
@@ -15,6 +16,20 @@ namespace atacom {
 
 namespace {
 constexpr int64_t kBlock = 1 << 14;  // elements per task; fixed
+
+// Values that fall below the smallest normal number are set to 0. A
+// parameter whose gradient is exactly 0 (a dead ReLU unit, a constant input)
+// has m and v decaying geometrically; without the flush they sit in the
+// subnormal range for thousands of updates, and arithmetic on subnormals
+// takes a microcode assist (~100x slower). Seen in ATACOM-SAC runs: after
+// ~80k steps Adam went from a few % to 40% of the update time and a 200k-step
+// run took twice as long. Tiny gradients are flushed too (their squares are
+// subnormal). Nothing else changes: such values are 0 next to eps = 1e-8.
+template <class A>
+void flush_subnormal(A& x) {
+  using T = typename A::Scalar;
+  x = (x.abs() < std::numeric_limits<T>::min()).select(T(0), x);
+}
 }
 
 AdamConfig default_adam_config() { return AdamConfig{}; }
@@ -52,6 +67,8 @@ void Adam<T>::step(T* p, const T* g, double lr) {
     Eigen::Map<const A> G(g + lo, n);
     M = b1 * M + (T(1) - b1) * G;
     V = b2 * V + (T(1) - b2) * G.square();
+    flush_subnormal(M);
+    flush_subnormal(V);
     P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
   });
 }
@@ -69,8 +86,11 @@ void Adam<T>::step_fused(T* p, T* g, double lr, T* target, double tau) {
     using A = Eigen::Array<T, Eigen::Dynamic, 1>;
     const Eigen::Index n = hi - lo;
     Eigen::Map<A> P(p + lo, n), M(m + lo, n), V(v + lo, n), G(g + lo, n);
+    flush_subnormal(G);
     M = b1 * M + (T(1) - b1) * G;
     V = b2 * V + (T(1) - b2) * G.square();
+    flush_subnormal(M);
+    flush_subnormal(V);
     P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
     G.setZero();
     if (target) {

@@ -36,6 +36,8 @@ class Adam {
   void step_fused(T* params, T* grads, double lr, T* target = nullptr, double tau = 0.0);
 
   size_t size() const { return m_.size(); }
+  const std::vector<T>& first_moment() const { return m_; }
+  const std::vector<T>& second_moment() const { return v_; }
   int64_t steps() const { return t_; }
   void save(std::ostream& out) const;
   void load(std::istream& in);  // throws on size mismatch or truncation
