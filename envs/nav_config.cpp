@@ -7,7 +7,7 @@
 
 #include "atacom/nav_env.hpp"
 #include "atacom/projector.hpp"
-#include "envs/nav_json.hpp"
+#include "atacom/config_json.hpp"
 
 namespace atacom {
 
@@ -124,7 +124,7 @@ void to_json(nlohmann::json& j, const NavConfig& c) {
 }
 
 void from_json(const nlohmann::json& j, NavConfig& out) {
-  using nav_json::Reader;
+  using Reader = ConfigReader;
   NavConfig c;
   Reader r(j, "nav");
   c.dt = r.number("dt");

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "envs/nav_json.hpp"
+#include "atacom/config_json.hpp"
 
 namespace atacom {
 
@@ -34,7 +34,7 @@ void to_json(nlohmann::json& j, const FetchPolicyParams& p) {
 }
 
 void from_json(const nlohmann::json& j, FetchPolicyParams& p) {
-  nav_json::Reader r(j, "fetch_policy");
+  ConfigReader r(j, "fetch_policy");
   FetchPolicyParams q;
   q.k_v = r.number("k_v");
   q.v_max = r.number("v_max");

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "atacom/fetch_policy.hpp"
-#include "envs/nav_json.hpp"
+#include "atacom/config_json.hpp"
 
 namespace atacom {
 
@@ -17,7 +17,7 @@ void to_json(nlohmann::json& j, const NavAttractorParams& p) {
 }
 
 void from_json(const nlohmann::json& j, NavAttractorParams& p) {
-  nav_json::Reader r(j, "nav_attractor");
+  ConfigReader r(j, "nav_attractor");
   NavAttractorParams q;
   q.k_v = r.number("k_v");
   q.v_clip = r.number("v_clip");

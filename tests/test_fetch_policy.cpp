@@ -18,10 +18,10 @@ TEST_CASE("fetch policy: strict JSON round trip", "[fetch_policy]") {
   REQUIRE(nlohmann::json(q) == j);
   nlohmann::json extra = j;
   extra["speed"] = 1.0;
-  REQUIRE_THROWS_WITH(from_json(extra, q), Catch::Contains("unknown key 'speed'"));
+  REQUIRE_THROWS_WITH(from_json(extra, q), Catch::Contains("unknown config key 'fetch_policy.speed'"));
   nlohmann::json missing = j;
   missing.erase("k_w");
-  REQUIRE_THROWS_WITH(from_json(missing, q), Catch::Contains("missing key 'k_w'"));
+  REQUIRE_THROWS_WITH(from_json(missing, q), Catch::Contains("missing config key 'fetch_policy.k_w'"));
   nlohmann::json bad = j;
   bad["v_max"] = -0.7;
   REQUIRE_THROWS_WITH(from_json(bad, q), Catch::Contains("v_max"));

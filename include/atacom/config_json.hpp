@@ -1,10 +1,11 @@
 // Strict reading of config structs from JSON.
 //
-// Every config struct parses through a ConfigReader: get() takes the keys it
-// knows (with a type check that names the key), finish() rejects any key that
-// was not taken. So a typo in a config file is an error, never a silent
-// default.
+// Every config struct parses through a ConfigReader: get() takes the optional
+// keys it knows (with a type check that names the key), number() / integer() /
+// string() / at() the required ones, and finish() rejects any key that was not
+// taken. So a typo in a config file is an error, never a silent default.
 #pragma once
+#include <cmath>
 #include <initializer_list>
 #include <set>
 #include <stdexcept>
@@ -58,6 +59,33 @@ class ConfigReader {
     return &j_.at(key);
   }
 
+  // Required keys: missing ones are errors. number() also rejects NaN/Inf.
+  const nlohmann::json& at(const std::string& key) {
+    seen_.insert(key);
+    if (!j_.contains(key)) throw std::invalid_argument("missing config key '" + path(key) + "'");
+    return j_.at(key);
+  }
+  double number(const std::string& key) {
+    const nlohmann::json& v = at(key);
+    if (!v.is_number()) throw std::invalid_argument(path(key) + ": expected a number");
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) throw std::invalid_argument(path(key) + ": must be finite");
+    return x;
+  }
+  int integer(const std::string& key) {
+    const nlohmann::json& v = at(key);
+    if (!v.is_number_integer()) throw std::invalid_argument(path(key) + ": expected an integer");
+    return v.get<int>();
+  }
+  std::string string(const std::string& key) {
+    const nlohmann::json& v = at(key);
+    if (!v.is_string()) throw std::invalid_argument(path(key) + ": expected a string");
+    return v.get<std::string>();
+  }
+  // "section.key": the name of a nested section for its own reader.
+  std::string path(const std::string& key) const { return section_ + "." + key; }
+
+  // Call last: rejects keys nobody asked for.
   void finish() const {
     for (auto it = j_.begin(); it != j_.end(); ++it)
       if (!seen_.count(it.key()))
