@@ -110,8 +110,8 @@ inline V vexp(V x) {
 
 inline bool finite(double x) { return std::isfinite(x); }
 
-// Software prefetch of the next block's inputs into L2, a few cache lines at
-// a time while the current block computes. At large N the batch streams from
+// Software prefetch of a later block's inputs into L2, a few cache lines at a
+// time while the current block computes. At large N the batch streams from
 // DRAM; issuing all the lines at once would stall on the miss buffers, and
 // the hardware prefetcher alone leaves the gathers waiting on memory.
 struct NextBlockPrefetch {
