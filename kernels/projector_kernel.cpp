@@ -291,25 +291,24 @@ void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi,
   for (int l = 0; l < L; ++l) src[l] = B.alpha.data() + lane_env(l) * m;
   gather_lanes(src, m, S.alpha);
 
-  NextBlockPrefetch pf;  // envs [hi + L, hi + 2 L): two blocks ahead hides DRAM latency best
-  {
+  // Prefetch envs [hi + L, hi + 2 L) (two blocks ahead hides DRAM latency
+  // best), spread over this block's constraint rows. Only when the batch's
+  // inputs exceed the L2 cache (1 MiB): in cache the prefetches are pure
+  // overhead (~10% at N = 128), from DRAM they gain 10-20%.
+  NextBlockPrefetch pf;
+  int pf_per_row = 0;
+  const size_t env_doubles = size_t(k) * (n + p) + gsz + n + k + m;  // f counted as n even without drift
+  if (size_t(B.N) * env_doubles * sizeof(double) > (size_t(1) << 20)) {
     const size_t e0 = size_t(std::min(hi + L, B.N)), e1 = size_t(std::min(hi + 2 * L, B.N));
-    if (e1 > e0) {
-      pf.add(B.Jq.data(), e0 * k * n, e1 * k * n);
-      pf.add(B.G.data(), e0 * gsz, e1 * gsz);
-      if (mod.has_drift) pf.add(B.f.data(), e0 * n, e1 * n);
-      pf.add(B.c.data(), e0 * k, e1 * k);
-      pf.add(B.alpha.data(), e0 * m, e1 * m);
-      if (p > 0) pf.add(B.Jx.data(), e0 * k * p, e1 * k * p);
-    }
+    pf.add(B.Jq.data(), e0 * k * n, e1 * k * n);
+    pf.add(B.G.data(), e0 * gsz, e1 * gsz);
+    if (mod.has_drift) pf.add(B.f.data(), e0 * n, e1 * n);
+    pf.add(B.c.data(), e0 * k, e1 * k);
+    pf.add(B.alpha.data(), e0 * m, e1 * m);
+    if (p > 0) pf.add(B.Jx.data(), e0 * k * p, e1 * k * p);
+    const size_t lines = size_t(L) * sizeof(double) * env_doubles / 64 + 6;
+    pf_per_row = int(lines / size_t(std::max(k, 1))) + 1;
   }
-  // Lines of the next block per constraint row of this one. Only when the
-  // batch's inputs exceed the L2 cache (1 MiB): in cache the prefetches are
-  // pure overhead (~10% at N = 128), from DRAM they gain 10-20%.
-  const size_t env_doubles = size_t(k) * (n + p) + gsz + n + p + k + m;
-  const size_t pf_lines = size_t(L) * sizeof(double) * env_doubles / 64 + 6;
-  const bool pf_on = size_t(B.N) * env_doubles * sizeof(double) > (size_t(1) << 20);
-  const int pf_per_row = pf_on ? int(pf_lines / size_t(std::max(k, 1))) + 1 : 0;
 
   // ---- alpha: NaN/Inf -> 0 (flagged), then clip to [-1, 1].
   VI alpha_bad = VI{};

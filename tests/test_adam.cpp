@@ -60,26 +60,22 @@ TEST_CASE("adam: the fused step equals step + zero_grad + Polyak", "[adam]") {
 }
 
 TEST_CASE("adam: moments never become subnormal (they would slow every update ~100x)", "[adam]") {
-  // A gradient that turns exactly 0 (dead ReLU) lets m decay by 0.9 per step:
-  // from 1e-4 it crosses FLT_MIN near step 790. Tiny gradients square to
-  // subnormals in v at once.
+  // Step 0: half the gradients 1e-3, half 3e-25 (squares to a subnormal);
+  // step 1: 1e-30 everywhere; then exactly 0 (a dead ReLU), so m decays by
+  // 0.9 per step and, from 1e-4, would cross FLT_MIN near step 790.
   const size_t n = 64;
   for (int fused = 0; fused < 2; ++fused) {
     atacom::Adam<float> opt(n, atacom::default_adam_config());
     std::vector<float> p(n, 1.0f), g(n);
-    for (size_t i = 0; i < n; ++i) g[i] = i % 2 ? 1e-3f : 3e-25f;
     bool subnormal = false, zero_m = false;
     for (int t = 0; t < 1200; ++t) {
-      if (t > 0 && t % 2 == 0) std::fill(g.begin(), g.end(), 0.0f);
-      if (t == 1)
-        for (size_t i = 0; i < n; ++i) g[i] = 1e-30f;
+      for (size_t i = 0; i < n; ++i) g[i] = t == 0 ? (i % 2 ? 1e-3f : 3e-25f) : t == 1 ? 1e-30f : 0.0f;
       if (fused) opt.step_fused(p.data(), g.data(), 1e-3);
       else opt.step(p.data(), g.data(), 1e-3);
       for (size_t i = 0; i < n; ++i) {
         subnormal = subnormal || std::fpclassify(opt.first_moment()[i]) == FP_SUBNORMAL ||
                     std::fpclassify(opt.second_moment()[i]) == FP_SUBNORMAL;
       }
-      if (fused) std::fill(g.begin(), g.end(), 0.0f);
     }
     for (float m : opt.first_moment()) zero_m = zero_m || m == 0.0f;
     INFO("fused " << fused);
