@@ -19,8 +19,8 @@
 #include <tbb/parallel_for.h>
 
 #include "atacom/parallel.hpp"
-#include "atacom/replay_buffer.hpp"
-#include "atacom/sac.hpp"
+#include "train/replay_buffer.hpp"
+#include "train/sac.hpp"
 #include "bench_common.hpp"
 
 using namespace atacom;

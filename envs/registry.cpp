@@ -2,9 +2,9 @@
 
 #include <stdexcept>
 
-#include "atacom/arm_env.hpp"
-#include "atacom/nav_env.hpp"
-#include "atacom/pendulum.hpp"
+#include "envs/arm/arm_env.hpp"
+#include "envs/nav/nav_env.hpp"
+#include "envs/pendulum/pendulum.hpp"
 
 namespace atacom {
 

@@ -4,8 +4,8 @@
 #pragma once
 #include <vector>
 
-#include "atacom/arm_env.hpp"
-#include "atacom/sdf.hpp"
+#include "envs/arm/arm_env.hpp"
+#include "src/core/sdf.hpp"
 #include "kernels/arm_fk_lanes.hpp"
 #include "kernels/lanes.hpp"
 #include "kernels/sdf_impl.hpp"

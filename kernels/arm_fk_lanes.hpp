@@ -4,7 +4,7 @@
 // the joint rotation Rz(q) mixes M's first two columns. PoI Jacobian column j
 // is z_j x (p - o_j). All constants come from the model (ArmFkConst).
 #pragma once
-#include "atacom/tiago_model.hpp"
+#include "envs/arm/tiago_model.hpp"
 #include "kernels/lanes.hpp"
 
 namespace atacom::lanes {

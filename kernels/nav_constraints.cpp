@@ -1,4 +1,4 @@
-#include "atacom/nav_constraints.hpp"
+#include "kernels/nav_constraints.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/adam.hpp"
+#include "train/adam.hpp"
 #include "atacom/rng.hpp"
 
 TEST_CASE("adam: matches the bias-corrected update rule", "[adam]") {

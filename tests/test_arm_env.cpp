@@ -7,7 +7,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "atacom/arm_env.hpp"
+#include "envs/arm/arm_env.hpp"
 #include "atacom/env_registry.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"

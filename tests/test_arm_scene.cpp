@@ -1,7 +1,7 @@
 // Scene geometry and placement of the manipulation envs.
 #include <catch2/catch.hpp>
 
-#include "atacom/arm_scene.hpp"
+#include "envs/arm/arm_scene.hpp"
 
 using namespace atacom;
 

@@ -4,7 +4,7 @@
 #include <functional>
 #include <vector>
 
-#include "atacom/autodiff.hpp"
+#include "train/autodiff.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <unistd.h>
 
-#include "atacom/checkpoint.hpp"
+#include "train/checkpoint.hpp"
 
 namespace fs = std::filesystem;
 

@@ -1,6 +1,6 @@
 #include <catch2/catch.hpp>
 
-#include "atacom/demo.hpp"
+#include "src/experiments/demo.hpp"
 #include "atacom/parallel.hpp"
 
 TEST_CASE("demo: no collisions through ATACOM, many without, same result for 1 and 2 threads", "[demo]") {

@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/fetch_policy.hpp"
+#include "envs/nav/fetch_policy.hpp"
 #include "atacom/rng.hpp"
 
 using namespace atacom;

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/filter.hpp"
+#include "src/safety/filter.hpp"
 
 using nlohmann::json;
 

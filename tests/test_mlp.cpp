@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/mlp.hpp"
+#include "train/mlp.hpp"
 
 using atacom::Mlp;
 using atacom::MlpConfig;

@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
-#include "atacom/nav_attractor.hpp"
-#include "atacom/nav_env.hpp"
+#include "envs/nav/nav_attractor.hpp"
+#include "envs/nav/nav_env.hpp"
 
 using namespace atacom;
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <vector>
 
-#include "atacom/nav_constraints.hpp"
-#include "atacom/nav_env.hpp"
+#include "kernels/nav_constraints.hpp"
+#include "envs/nav/nav_env.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/system.hpp"

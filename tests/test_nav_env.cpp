@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
-#include "atacom/nav_env.hpp"
+#include "envs/nav/nav_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/safe_env.hpp"

@@ -7,7 +7,7 @@
 #include <cerrno>
 #include <cstddef>
 
-#include "atacom/arm_env.hpp"
+#include "envs/arm/arm_env.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
 

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
-#include "atacom/pendulum.hpp"
+#include "envs/pendulum/pendulum.hpp"
 
 using atacom::PendulumEnv;
 

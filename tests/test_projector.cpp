@@ -8,7 +8,7 @@
 
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
-#include "atacom/projector_reference.hpp"
+#include "src/core/projector_reference.hpp"
 #include "atacom/rng.hpp"
 
 using namespace atacom;

@@ -3,7 +3,7 @@
 #include <sstream>
 #include <vector>
 
-#include "atacom/replay_buffer.hpp"
+#include "train/replay_buffer.hpp"
 
 using atacom::ReplayBatch;
 using atacom::ReplayBuffer;

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/sac.hpp"
+#include "train/sac.hpp"
 #include "atacom/trainer.hpp"
 
 using atacom::ReplayBatch;

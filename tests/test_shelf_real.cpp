@@ -2,7 +2,7 @@
 // attractor with and without ATACOM.
 #include <catch2/catch.hpp>
 
-#include "atacom/shelf_real.hpp"
+#include "envs/arm/shelf_real.hpp"
 
 using namespace atacom;
 

@@ -8,9 +8,9 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
-#include "atacom/data_dir.hpp"
+#include "src/core/data_dir.hpp"
 #include "atacom/rng.hpp"
-#include "atacom/tiago_kinematics.hpp"
+#include "envs/arm/tiago_kinematics.hpp"
 
 using namespace atacom;
 

@@ -1,4 +1,4 @@
-#include "atacom/adam.hpp"
+#include "train/adam.hpp"
 
 #include <cmath>
 #include <limits>
@@ -8,8 +8,8 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "atacom/binary_io.hpp"
-#include "atacom/config_json.hpp"
+#include "src/core/binary_io.hpp"
+#include "src/core/config_json.hpp"
 #include "atacom/parallel.hpp"
 
 namespace atacom {

@@ -1,4 +1,4 @@
-#include "atacom/autodiff.hpp"
+#include "train/autodiff.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "atacom/checkpoint.hpp"
+#include "train/checkpoint.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -9,8 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "atacom/binary_io.hpp"
-#include "atacom/fs_util.hpp"
+#include "src/core/binary_io.hpp"
+#include "src/core/fs_util.hpp"
 
 namespace atacom {
 

@@ -1,11 +1,11 @@
-#include "atacom/mlp.hpp"
+#include "train/mlp.hpp"
 
 #include <cmath>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/config_json.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 

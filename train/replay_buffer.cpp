@@ -1,4 +1,4 @@
-#include "atacom/replay_buffer.hpp"
+#include "train/replay_buffer.hpp"
 
 #include <cstring>
 #include <istream>
@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "atacom/binary_io.hpp"
+#include "src/core/binary_io.hpp"
 
 namespace atacom {
 

@@ -1,4 +1,4 @@
-#include "atacom/sac.hpp"
+#include "train/sac.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -7,8 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/binary_io.hpp"
-#include "atacom/config_json.hpp"
+#include "src/core/binary_io.hpp"
+#include "src/core/config_json.hpp"
 #include "atacom/parallel.hpp"
 
 #include <tbb/parallel_invoke.h>

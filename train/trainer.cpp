@@ -11,13 +11,13 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "atacom/binary_io.hpp"
-#include "atacom/checkpoint.hpp"
-#include "atacom/config_json.hpp"
+#include "src/core/binary_io.hpp"
+#include "train/checkpoint.hpp"
+#include "src/core/config_json.hpp"
 #include "atacom/env_registry.hpp"
-#include "atacom/fs_util.hpp"
-#include "atacom/replay_buffer.hpp"
-#include "atacom/svg.hpp"
+#include "src/core/fs_util.hpp"
+#include "train/replay_buffer.hpp"
+#include "src/core/svg.hpp"
 
 namespace atacom {
 

@@ -20,7 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/sac.hpp"
+#include "train/sac.hpp"
 
 namespace atacom {
 

@@ -2,8 +2,8 @@
 #include <filesystem>
 #include <iostream>
 
-#include "atacom/demo.hpp"
-#include "atacom/fs_util.hpp"
+#include "src/experiments/demo.hpp"
+#include "src/core/fs_util.hpp"
 #include "cli/command.hpp"
 
 namespace {

@@ -1,7 +1,7 @@
-// atacom filter: JSON Lines in, safe controls out (schema in include/atacom/filter.hpp and the README).
+// atacom filter: JSON Lines in, safe controls out (schema in src/safety/filter.hpp and the README).
 #include <iostream>
 
-#include "atacom/filter.hpp"
+#include "src/safety/filter.hpp"
 #include "cli/command.hpp"
 
 namespace {

@@ -2,7 +2,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "atacom/rollout.hpp"
+#include "train/rollout.hpp"
 #include "cli/command.hpp"
 
 namespace {

@@ -6,7 +6,7 @@
 
 #include "atacom/env_registry.hpp"
 #include "atacom/rng.hpp"
-#include "atacom/shelf_real.hpp"
+#include "envs/arm/shelf_real.hpp"
 #include "atacom/trainer.hpp"
 #include "cli/command.hpp"
 

@@ -1,0 +1,170 @@
+#include "envs/arm/shelf_real.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+#include "atacom/projector.hpp"
+
+namespace atacom {
+
+ShelfRealConfig default_shelf_real_config() { return ShelfRealConfig{}; }
+
+void to_json(nlohmann::json& j, const ShelfRealConfig& c) {
+  j = {{"trials", c.trials},
+       {"targets", c.targets},
+       {"success_radius", c.success_radius},
+       {"hold_time", c.hold_time},
+       {"max_time_per_target", c.max_time_per_target},
+       {"atacom", c.atacom},
+       {"seed", c.seed}};
+}
+
+void to_json(nlohmann::json& j, const ShelfRealResult& r) {
+  j = nlohmann::json::object();
+  j["trials"] = r.trials;
+  j["collisions"] = r.total_collisions;
+  j["violation_steps"] = r.max_constraint_violations;
+  j["targets"] = nlohmann::json::array();
+  for (size_t t = 0; t < r.targets.size(); ++t) {
+    const ShelfRealTarget& s = r.targets[t];
+    j["targets"].push_back({{"target", t + 1},
+                            {"final_error_mean", s.final_error_mean},
+                            {"final_error_std", s.final_error_std},
+                            {"success_rate", s.success_rate},
+                            {"collisions", s.collisions},
+                            {"time_mean", s.time_mean},
+                            {"time_std", s.time_std}});
+  }
+}
+
+namespace {
+void mean_std(const std::vector<double>& v, double& mean, double& sd) {
+  mean = sd = 0.0;
+  if (v.empty()) return;
+  for (double x : v) mean += x;
+  mean /= static_cast<double>(v.size());
+  for (double x : v) sd += (x - mean) * (x - mean);
+  sd = std::sqrt(sd / static_cast<double>(v.size()));
+}
+}  // namespace
+
+ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfRealConfig& cfg,
+                                    const BatchPolicy& policy) {
+  if (cfg.trials < 1 || cfg.targets < 1) throw std::invalid_argument("shelf-real: trials and targets must be >= 1");
+  if (!(cfg.success_radius > 0.0 && cfg.hold_time >= 0.0 && cfg.max_time_per_target > cfg.hold_time))
+    throw std::invalid_argument("shelf-real: need success_radius > 0 and max_time_per_target > hold_time >= 0");
+  ArmEnvConfig ec = env_config;
+  const int max_steps = static_cast<int>(std::lround(cfg.max_time_per_target / ec.dt));
+  const int hold_steps = static_cast<int>(std::lround(cfg.hold_time / ec.dt));
+  ec.horizon = cfg.targets * max_steps + 1;  // the protocol, not the horizon, ends a trial
+  const int N = cfg.trials;
+  ArmEnv env(ec, N);
+  env.seed(cfg.seed);
+  const ProjectorModel pm = env.projector_model();
+  ProjectorBatch pb(pm, N);
+  const EnvSpec& spec = env.spec();
+  const size_t ni = spec.info_names.size();
+
+  // Targets: the env's first goal, then further goals from each env's stream.
+  std::vector<double> targets(static_cast<size_t>(N) * cfg.targets * 3);
+  for (int e = 0; e < N; ++e) {
+    for (int r = 0; r < 3; ++r) targets[(e * cfg.targets) * 3 + r] = env.goal()[e * 3 + r];
+    for (int t = 1; t < cfg.targets; ++t)
+      env.sample_goal(e, &targets[(e * cfg.targets + t - 1) * 3], &targets[(e * cfg.targets + t) * 3]);
+  }
+
+  ShelfRealResult res;
+  res.trials = N;
+  res.targets.resize(cfg.targets);
+  std::vector<uint8_t> dead(N, 0);  // trial ended by a collision
+  std::vector<double> action(static_cast<size_t>(N) * kArmJoints);
+  std::vector<float> obs(env.buffers().obs);
+  for (int t = 0; t < cfg.targets; ++t) {
+    for (int e = 0; e < N; ++e)
+      if (!dead[e]) env.set_goal(e, &targets[(e * cfg.targets + t) * 3]);
+    std::vector<int> inside(N, 0), done_at(N, -1);
+    std::vector<double> err(N, 0.0);
+    std::vector<uint8_t> hit(N, 0);
+    const std::vector<uint8_t> attempted = [&] {
+      std::vector<uint8_t> a(N);
+      for (int e = 0; e < N; ++e) a[e] = !dead[e];
+      return a;
+    }();
+    for (int s = 0; s < max_steps; ++s) {
+      bool active = false;
+      for (int e = 0; e < N; ++e) active = active || (!dead[e] && done_at[e] < 0);
+      if (!active) break;
+      obs = env.buffers().obs;
+      policy(obs.data(), N, action.data());
+      if (cfg.atacom) {
+        pb.alpha = action;
+        env.constraint_model(pb, 0, N);
+        project_batch(pm, pb);
+        action = pb.a;
+      }
+      // Envs that finished this target (or died) hold still.
+      for (int e = 0; e < N; ++e)
+        if (dead[e] || done_at[e] >= 0)
+          for (int j = 0; j < kArmJoints; ++j) action[e * kArmJoints + j] = 0.0;
+      env.step(action.data());
+      const EnvBuffers& b = env.buffers();
+      for (int e = 0; e < N; ++e) {
+        if (dead[e] || done_at[e] >= 0) continue;
+        bool viol = false;
+        for (int r = 0; r < kArmRows; ++r) viol = viol || b.constraints[e * kArmRows + r] > spec.constraint_tolerance[r];
+        res.max_constraint_violations += viol;
+        const double d = b.info[e * ni + 3];  // distance at the reached state
+        err[e] = d;
+        if (b.terminated[e]) {
+          hit[e] = 1;
+          dead[e] = 1;
+          continue;
+        }
+        inside[e] = d < cfg.success_radius ? inside[e] + 1 : 0;
+        if (inside[e] >= hold_steps) done_at[e] = s + 1;
+      }
+    }
+    ShelfRealTarget& st = res.targets[t];
+    std::vector<double> errs, times;
+    int ok = 0;
+    for (int e = 0; e < N; ++e) {
+      if (attempted[e]) errs.push_back(err[e]);  // trials that crashed earlier never start this target
+      if (done_at[e] >= 0) {
+        ++ok;
+        times.push_back(done_at[e] * ec.dt);
+      }
+      st.collisions += hit[e];
+    }
+    mean_std(errs, st.final_error_mean, st.final_error_std);
+    mean_std(times, st.time_mean, st.time_std);
+    st.success_rate = static_cast<double>(ok) / N;
+    res.total_collisions += st.collisions;
+  }
+  return res;
+}
+
+BatchPolicy make_linear_attractor_policy(const ArmEnv& env) {
+  const TiagoArmModel model = env.model();
+  const std::vector<double> vmax = env.vmax();
+  return [model, vmax](const float* obs, int N, double* actions) {
+    for (int e = 0; e < N; ++e) {
+      const float* o = obs + static_cast<size_t>(e) * kArmObsDim;
+      ArmQ q;
+      for (int j = 0; j < kArmJoints; ++j) q(j) = o[j];
+      const Eigen::Vector3d goal(o[7], o[8], o[9]);
+      const ArmFkResult fk = arm_fk_reference(model, q);
+      // qdot = J^+ K (goal - p), K = I (the authors' gain); the right
+      // pseudo-inverse J^T (J J^T)^-1 with a tiny damping against singularities.
+      const Eigen::Matrix3d JJt = fk.J_grasp_pos * fk.J_grasp_pos.transpose() + 1e-6 * Eigen::Matrix3d::Identity();
+      const ArmQ qdot = fk.J_grasp_pos.transpose() * (JJt.inverse() * (goal - fk.grasp.p));
+      double scale = 1.0;
+      for (int j = 0; j < kArmJoints; ++j) scale = std::max(scale, std::abs(qdot(j)) / vmax[j]);
+      for (int j = 0; j < kArmJoints; ++j) actions[e * kArmJoints + j] = qdot(j) / (vmax[j] * scale);
+    }
+  };
+}
+
+}  // namespace atacom

@@ -1,0 +1,62 @@
+// ShelfEnvReal protocol (paper, "Real Robot Validation") as an evaluation
+// mode of the shelf env: every trial starts from a random safe configuration
+// and reaches two targets one after the other. A target succeeds once the
+// grasping frame stays within success_radius of it for hold_time; each target
+// has at most max_time_per_target. Reported per target, as in the paper's
+// table: final error, success rate, collisions and time.
+//
+// Trials run as a batch of envs (one env per trial). The policy is a callback
+// from observations to actions, so any policy (a trained actor, the linear
+// attractor, random) can be evaluated; with atacom the ATACOM projector sits
+// between the policy's alpha and the env, exactly as in training.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "envs/arm/arm_env.hpp"
+
+namespace atacom {
+
+// obs: (N x obs_dim) floats; actions: (N x act_dim) doubles to fill, in [-1, 1].
+using BatchPolicy = std::function<void(const float* obs, int N, double* actions)>;
+
+struct ShelfRealConfig {
+  int trials = 25;                     // the paper ran 25
+  int targets = 2;
+  double success_radius = 0.10;        // m
+  double hold_time = 2.0;              // s inside the radius to count as success
+  double max_time_per_target = 16.67;  // s
+  bool atacom = true;
+  uint64_t seed = 0;
+};
+ShelfRealConfig default_shelf_real_config();
+void to_json(nlohmann::json& j, const ShelfRealConfig& c);
+
+struct ShelfRealTarget {
+  double final_error_mean = 0.0, final_error_std = 0.0;  // m, at the end of the phase, over trials that started it
+  double success_rate = 0.0;                             // over all trials (a crashed trial fails what is left)
+  int collisions = 0;                                    // trials that hit something during this target
+  double time_mean = 0.0, time_std = 0.0;                // s until success, over successful trials
+};
+
+struct ShelfRealResult {
+  std::vector<ShelfRealTarget> targets;
+  int trials = 0;
+  int total_collisions = 0;
+  int max_constraint_violations = 0;  // env-steps with a row above its tolerance
+};
+void to_json(nlohmann::json& j, const ShelfRealResult& r);
+
+// Runs the protocol on a shelf env built from env_config (its horizon is
+// raised to cover all targets). Throws std::invalid_argument on bad settings.
+ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfRealConfig& config,
+                                    const BatchPolicy& policy);
+
+// The paper's Linear Attractor baseline on the arm: qdot = J_pos^+ (goal - p),
+// scaled to the action box (reads q and the goal from the observation).
+BatchPolicy make_linear_attractor_policy(const ArmEnv& env);
+
+}  // namespace atacom

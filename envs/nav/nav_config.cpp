@@ -1,0 +1,222 @@
+// NavConfig: default factory, validation and strict JSON.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "envs/nav/nav_env.hpp"
+#include "atacom/projector.hpp"
+#include "src/core/config_json.hpp"
+
+namespace atacom {
+
+NavConfig default_nav_config() {
+  NavConfig c;
+  c.fetch.policy = default_fetch_policy_params();
+  return c;
+}
+
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("nav config: " + what);
+}
+
+bool pos(double x) { return std::isfinite(x) && x > 0.0; }
+
+}  // namespace
+
+void validate(const NavConfig& c) {
+  require(pos(c.dt), "dt must be finite and > 0");
+  require(c.horizon >= 1, "horizon must be >= 1");
+  require(c.block >= 1, "block must be >= 1");
+  require(pos(c.room.x) && pos(c.room.y), "room.x and room.y must be > 0");
+  require(pos(c.room.wall_thickness), "room.wall_thickness must be > 0");
+  require(pos(c.tiago.radius) && pos(c.fetch.radius), "tiago.radius and fetch.radius must be > 0");
+  require(pos(c.tiago.v_max) && pos(c.tiago.w_max), "tiago.v_max and tiago.w_max must be > 0");
+  require(pos(c.room.spawn_fraction) && c.room.spawn_fraction <= 1.0, "room.spawn_fraction must be in (0, 1]");
+  // Every sampled start must be free of walls and inside the wall constraints.
+  const double sx = c.room.spawn_fraction * c.room.x, sy = c.room.spawn_fraction * c.room.y;
+  const double reach = std::max(c.tiago.radius + c.constraints.wall_margin, c.fetch.radius);
+  require(sx + reach < c.room.x && sy + reach < c.room.y,
+          "spawn area (spawn_fraction * room) plus the robot radius and wall margin must fit inside the room");
+  // Every start must satisfy the clearance row.
+  require(std::isfinite(c.room.min_start_separation) &&
+              c.room.min_start_separation > c.tiago.radius + c.fetch.radius + c.constraints.fetch_margin,
+          "room.min_start_separation must exceed tiago.radius + fetch.radius + constraints.fetch_margin");
+  // Keep rejection sampling of the Fetch start cheap: the excluded disc may
+  // cover at most a quarter of the spawn rectangle.
+  require(M_PI * c.room.min_start_separation * c.room.min_start_separation <= 0.25 * (4.0 * sx * sy),
+          "room.min_start_separation is too large for the spawn area");
+  validate(c.fetch.policy);
+  require(std::isfinite(c.reward.distance_weight) && c.reward.distance_weight >= 0.0,
+          "reward.distance_weight must be >= 0");
+  require(std::isfinite(c.reward.heading_gain) && std::isfinite(c.reward.heading_offset),
+          "reward.heading_gain and reward.heading_offset must be finite");
+  require(std::isfinite(c.reward.action_change_weight) && c.reward.action_change_weight >= 0.0,
+          "reward.action_change_weight must be >= 0");
+  require(pos(c.reward.goal_radius), "reward.goal_radius must be > 0");
+  require(std::isfinite(c.reward.goal_bonus) && std::isfinite(c.reward.collision_reward),
+          "reward.goal_bonus and reward.collision_reward must be finite");
+  require(std::isfinite(c.constraints.wall_margin) && c.constraints.wall_margin >= 0.0,
+          "constraints.wall_margin must be >= 0");
+  require(std::isfinite(c.constraints.fetch_margin) && c.constraints.fetch_margin >= 0.0,
+          "constraints.fetch_margin must be >= 0");
+  require(std::isfinite(c.constraints.wall_lookahead) && c.constraints.wall_lookahead >= 0.0 &&
+              std::isfinite(c.constraints.fetch_lookahead) && c.constraints.fetch_lookahead >= 0.0,
+          "constraints.wall_lookahead and constraints.fetch_lookahead must be >= 0");
+  require(std::isfinite(c.constraints.fetch_sweep) && c.constraints.fetch_sweep >= 0.0,
+          "constraints.fetch_sweep must be >= 0");
+  require(std::isfinite(c.constraints.wall_buffer) && c.constraints.wall_buffer >= 0.0,
+          "constraints.wall_buffer must be >= 0");
+  parse_slack_type(c.constraints.slack);
+  parse_basis_type(c.constraints.basis);
+  require(pos(c.constraints.wall_beta) && pos(c.constraints.fetch_beta), "constraints betas must be > 0");
+  require(pos(c.constraints.wall_tol) && pos(c.constraints.fetch_tol), "constraints tols must be > 0");
+  require(std::isfinite(c.constraints.violation_tolerance) && c.constraints.violation_tolerance >= 0.0,
+          "constraints.violation_tolerance must be >= 0");
+  require(c.box2d.velocity_iterations >= 1 && c.box2d.position_iterations >= 1,
+          "box2d iteration counts must be >= 1");
+}
+
+void to_json(nlohmann::json& j, const NavConfig& c) {
+  nlohmann::json policy;
+  to_json(policy, c.fetch.policy);
+  j = nlohmann::json{
+      {"dt", c.dt},
+      {"horizon", c.horizon},
+      {"block", c.block},
+      {"room",
+       {{"x", c.room.x},
+        {"y", c.room.y},
+        {"wall_thickness", c.room.wall_thickness},
+        {"spawn_fraction", c.room.spawn_fraction},
+        {"min_start_separation", c.room.min_start_separation}}},
+      {"tiago", {{"radius", c.tiago.radius}, {"v_max", c.tiago.v_max}, {"w_max", c.tiago.w_max}}},
+      {"fetch", {{"radius", c.fetch.radius}, {"policy", policy}}},
+      {"reward",
+       {{"distance_weight", c.reward.distance_weight},
+        {"heading_gain", c.reward.heading_gain},
+        {"heading_offset", c.reward.heading_offset},
+        {"action_change_weight", c.reward.action_change_weight},
+        {"goal_radius", c.reward.goal_radius},
+        {"goal_bonus", c.reward.goal_bonus},
+        {"collision_reward", c.reward.collision_reward}}},
+      {"constraints",
+       {{"wall_margin", c.constraints.wall_margin},
+        {"fetch_margin", c.constraints.fetch_margin},
+        {"wall_lookahead", c.constraints.wall_lookahead},
+        {"fetch_lookahead", c.constraints.fetch_lookahead},
+        {"fetch_sweep", c.constraints.fetch_sweep},
+        {"wall_buffer", c.constraints.wall_buffer},
+        {"slack", c.constraints.slack},
+        {"basis", c.constraints.basis},
+        {"wall_beta", c.constraints.wall_beta},
+        {"wall_tol", c.constraints.wall_tol},
+        {"fetch_beta", c.constraints.fetch_beta},
+        {"fetch_tol", c.constraints.fetch_tol},
+        {"violation_tolerance", c.constraints.violation_tolerance}}},
+      {"box2d",
+       {{"velocity_iterations", c.box2d.velocity_iterations},
+        {"position_iterations", c.box2d.position_iterations}}},
+  };
+}
+
+void from_json(const nlohmann::json& j, NavConfig& out) {
+  using Reader = ConfigReader;
+  NavConfig c;
+  Reader r(j, "nav");
+  c.dt = r.number("dt");
+  c.horizon = r.integer("horizon");
+  c.block = r.integer("block");
+  {
+    Reader s(r.at("room"), r.path("room"));
+    c.room.x = s.number("x");
+    c.room.y = s.number("y");
+    c.room.wall_thickness = s.number("wall_thickness");
+    c.room.spawn_fraction = s.number("spawn_fraction");
+    c.room.min_start_separation = s.number("min_start_separation");
+    s.finish();
+  }
+  {
+    Reader s(r.at("tiago"), r.path("tiago"));
+    c.tiago.radius = s.number("radius");
+    c.tiago.v_max = s.number("v_max");
+    c.tiago.w_max = s.number("w_max");
+    s.finish();
+  }
+  {
+    Reader s(r.at("fetch"), r.path("fetch"));
+    c.fetch.radius = s.number("radius");
+    from_json(s.at("policy"), c.fetch.policy);
+    s.finish();
+  }
+  {
+    Reader s(r.at("reward"), r.path("reward"));
+    c.reward.distance_weight = s.number("distance_weight");
+    c.reward.heading_gain = s.number("heading_gain");
+    c.reward.heading_offset = s.number("heading_offset");
+    c.reward.action_change_weight = s.number("action_change_weight");
+    c.reward.goal_radius = s.number("goal_radius");
+    c.reward.goal_bonus = s.number("goal_bonus");
+    c.reward.collision_reward = s.number("collision_reward");
+    s.finish();
+  }
+  {
+    Reader s(r.at("constraints"), r.path("constraints"));
+    c.constraints.wall_margin = s.number("wall_margin");
+    c.constraints.fetch_margin = s.number("fetch_margin");
+    c.constraints.wall_lookahead = s.number("wall_lookahead");
+    c.constraints.fetch_lookahead = s.number("fetch_lookahead");
+    c.constraints.fetch_sweep = s.number("fetch_sweep");
+    c.constraints.wall_buffer = s.number("wall_buffer");
+    c.constraints.slack = s.string("slack");
+    c.constraints.basis = s.string("basis");
+    c.constraints.wall_beta = s.number("wall_beta");
+    c.constraints.wall_tol = s.number("wall_tol");
+    c.constraints.fetch_beta = s.number("fetch_beta");
+    c.constraints.fetch_tol = s.number("fetch_tol");
+    c.constraints.violation_tolerance = s.number("violation_tolerance");
+    s.finish();
+  }
+  {
+    Reader s(r.at("box2d"), r.path("box2d"));
+    c.box2d.velocity_iterations = s.integer("velocity_iterations");
+    c.box2d.position_iterations = s.integer("position_iterations");
+    s.finish();
+  }
+  r.finish();
+  validate(c);
+  out = c;
+}
+
+nlohmann::json nav_default_config_json() {
+  nlohmann::json j;
+  to_json(j, default_nav_config());
+  return j;
+}
+
+NavConstraintGeometry nav_constraint_geometry(const NavConfig& c) {
+  NavConstraintGeometry g;
+  g.room_x = c.room.x;
+  g.room_y = c.room.y;
+  g.tiago_radius = c.tiago.radius;
+  g.fetch_radius = c.fetch.radius;
+  g.wall_margin = c.constraints.wall_margin;
+  g.fetch_margin = c.constraints.fetch_margin;
+  g.wall_lookahead = c.constraints.wall_lookahead;
+  g.fetch_lookahead = c.constraints.fetch_lookahead;
+  g.fetch_sweep = c.constraints.fetch_sweep;
+  g.wall_buffer = c.constraints.wall_buffer;
+  return g;
+}
+
+DiffDriveSystem nav_tiago_system(const NavConfig& c) {
+  DiffDriveSystem s;
+  s.v_max = c.tiago.v_max;
+  s.w_max = c.tiago.w_max;
+  return s;
+}
+
+}  // namespace atacom

@@ -1,0 +1,202 @@
+#include "envs/pendulum/pendulum.hpp"
+
+#include <cmath>
+#include <istream>
+#include <ostream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "src/core/binary_io.hpp"
+#include "src/core/config_json.hpp"
+#include "atacom/parallel.hpp"
+
+namespace atacom {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr uint32_t kTagPendulum = 0x50454e44;  // "PEND"
+constexpr int kInfoAbsTheta = 0, kInfoNonfinite = 1;
+}  // namespace
+
+PendulumModel default_pendulum_model() { return PendulumModel{}; }
+
+void to_json(nlohmann::json& j, const PendulumModel& p) {
+  j = nlohmann::json{{"g", p.g}, {"m", p.m}, {"l", p.l}, {"dt", p.dt}, {"max_speed", p.max_speed},
+                     {"max_torque", p.max_torque}, {"horizon", p.horizon}};
+}
+
+void from_json(const nlohmann::json& j, PendulumModel& p) {
+  ConfigReader r(j, "env");
+  p = default_pendulum_model();
+  r.get("g", p.g);
+  r.get("m", p.m);
+  r.get("l", p.l);
+  r.get("dt", p.dt);
+  r.get("max_speed", p.max_speed);
+  r.get("max_torque", p.max_torque);
+  r.get("horizon", p.horizon);
+  r.finish();
+  auto pos = [](double v) { return v > 0 && std::isfinite(v); };
+  if (!std::isfinite(p.g)) throw std::invalid_argument("config: env.g must be finite");
+  if (!pos(p.m) || !pos(p.l) || !pos(p.dt) || !pos(p.max_speed) || !pos(p.max_torque))
+    throw std::invalid_argument("config: env.m, l, dt, max_speed and max_torque must be positive");
+  if (p.horizon < 1) throw std::invalid_argument("config: env.horizon must be >= 1");
+}
+
+double angle_normalize(double x) {
+  double r = std::fmod(x + kPi, 2.0 * kPi);
+  if (r < 0) r += 2.0 * kPi;
+  return r - kPi;
+}
+
+PendulumEnv::PendulumEnv(const PendulumModel& model, int num_envs) : model_(model) {
+  if (num_envs < 1) throw std::invalid_argument("pendulum: number of envs must be >= 1");
+  spec_.name = "pendulum";
+  spec_.obs_dim = 3;
+  spec_.act_dim = 1;
+  spec_.obs_low = {-1.0f, -1.0f, -float(model.max_speed)};
+  spec_.obs_high = {1.0f, 1.0f, float(model.max_speed)};
+  spec_.dt = model.dt;
+  spec_.horizon = model.horizon;
+  spec_.info_names = {"abs_theta", "nonfinite_action"};
+  spec_.info_reduce = {InfoReduce::Last, InfoReduce::Sum};
+  buffers_.resize(spec_, num_envs);
+  const size_t n = size_t(num_envs);
+  theta_.assign(n, 0.0);
+  theta_dot_.assign(n, 0.0);
+  t_.assign(n, 0);
+  ret_.assign(n, 0.0);
+  rng_.assign(n, Rng());
+  seed(0);
+}
+
+void PendulumEnv::write_obs(int i, float* obs) const {
+  float* o = obs + size_t(i) * 3;
+  o[0] = float(std::cos(theta_[size_t(i)]));
+  o[1] = float(std::sin(theta_[size_t(i)]));
+  o[2] = float(theta_dot_[size_t(i)]);
+}
+
+void PendulumEnv::reset_one(int i) {
+  Rng& r = rng_[size_t(i)];
+  theta_[size_t(i)] = r.uniform(-kPi, kPi);
+  theta_dot_[size_t(i)] = r.uniform(-1.0, 1.0);
+  t_[size_t(i)] = 0;
+  ret_[size_t(i)] = 0.0;
+}
+
+void PendulumEnv::seed(uint64_t s) {
+  for (int i = 0; i < num_envs(); ++i) rng_[size_t(i)].reseed(s, uint64_t(i));
+  reset(nullptr);
+}
+
+void PendulumEnv::reset(const uint8_t* mask) {
+  EnvBuffers& b = buffers_;
+  for (int i = 0; i < num_envs(); ++i) {
+    if (mask && !mask[i]) continue;
+    reset_one(i);
+    write_obs(i, b.obs.data());
+    write_obs(i, b.final_obs.data());
+    b.terminated[size_t(i)] = 0;
+    b.truncated[size_t(i)] = 0;
+  }
+}
+
+void PendulumEnv::step(const double* actions) {
+  EnvBuffers& b = buffers_;
+  const PendulumModel& p = model_;
+  const int ninfo = static_cast<int>(spec_.info_names.size());
+  parallel_blocks(num_envs(), 4096, [&](int64_t lo, int64_t hi) {
+    for (int64_t k = lo; k < hi; ++k) {
+      const int i = static_cast<int>(k);
+      const size_t s = size_t(i);
+      double a = actions[s];
+      const bool bad = !std::isfinite(a);
+      if (bad) a = 0.0;
+      a = std::min(std::max(a, -1.0), 1.0);
+      const double u = p.max_torque * a;
+      const double th = theta_[s], thdot = theta_dot_[s];
+      const double thn = angle_normalize(th);
+      const double costs = thn * thn + 0.1 * thdot * thdot + 0.001 * u * u;
+      double newthdot = thdot + (3.0 * p.g / (2.0 * p.l) * std::sin(th) + 3.0 / (p.m * p.l * p.l) * u) * p.dt;
+      newthdot = std::min(std::max(newthdot, -p.max_speed), p.max_speed);
+      theta_[s] = th + newthdot * p.dt;
+      theta_dot_[s] = newthdot;
+      const double reward = -costs;
+      ret_[s] += reward;
+      t_[s] += 1;
+      b.reward[s] = float(reward);
+      b.cost[s] = 0.0f;
+      b.terminated[s] = 0;
+      b.truncated[s] = t_[s] >= p.horizon ? 1 : 0;
+      b.info[s * ninfo + kInfoAbsTheta] = float(std::abs(angle_normalize(theta_[s])));
+      b.info[s * ninfo + kInfoNonfinite] = bad ? 1.0f : 0.0f;
+      write_obs(i, b.final_obs.data());
+      if (b.truncated[s]) {
+        b.episode_return[s] = ret_[s];
+        b.episode_length[s] = t_[s];
+        reset_one(i);  // same-step autoreset: obs starts the next episode
+        write_obs(i, b.obs.data());
+      } else {
+        for (int j = 0; j < 3; ++j) b.obs[s * 3 + j] = b.final_obs[s * 3 + j];
+      }
+    }
+  });
+}
+
+void PendulumEnv::save_state(std::ostream& out) const {
+  const EnvBuffers& b = buffers_;
+  bin::write_tag(out, kTagPendulum);
+  bin::write_pod<int32_t>(out, num_envs());
+  bin::write_vec(out, theta_);
+  bin::write_vec(out, theta_dot_);
+  bin::write_vec(out, t_);
+  bin::write_vec(out, ret_);
+  for (const Rng& r : rng_) bin::write_rng(out, r);
+  bin::write_vec(out, b.obs);
+  bin::write_vec(out, b.final_obs);
+  bin::write_vec(out, b.reward);
+  bin::write_vec(out, b.terminated);
+  bin::write_vec(out, b.truncated);
+  bin::write_vec(out, b.info);
+  bin::write_vec(out, b.episode_return);
+  bin::write_vec(out, b.episode_length);
+}
+
+void PendulumEnv::load_state(std::istream& in) {
+  EnvBuffers& b = buffers_;
+  bin::expect_tag(in, kTagPendulum, "pendulum");
+  const int32_t n = bin::read_pod<int32_t>(in, "pendulum.N");
+  if (n != num_envs())
+    throw std::runtime_error("pendulum snapshot holds " + std::to_string(n) + " envs, this batch has " +
+                             std::to_string(num_envs()));
+  bin::read_vec(in, theta_, "pendulum.theta", n);
+  bin::read_vec(in, theta_dot_, "pendulum.theta_dot", n);
+  bin::read_vec(in, t_, "pendulum.t", n);
+  bin::read_vec(in, ret_, "pendulum.return", n);
+  for (Rng& r : rng_) bin::read_rng(in, r, "pendulum.rng");
+  bin::read_vec(in, b.obs, "pendulum.obs", int64_t(n) * 3);
+  bin::read_vec(in, b.final_obs, "pendulum.final_obs", int64_t(n) * 3);
+  bin::read_vec(in, b.reward, "pendulum.reward", n);
+  bin::read_vec(in, b.terminated, "pendulum.terminated", n);
+  bin::read_vec(in, b.truncated, "pendulum.truncated", n);
+  bin::read_vec(in, b.info, "pendulum.info", int64_t(n) * int64_t(spec_.info_names.size()));
+  bin::read_vec(in, b.episode_return, "pendulum.episode_return", n);
+  bin::read_vec(in, b.episode_length, "pendulum.episode_length", n);
+}
+
+EnvEntry pendulum_env_entry() {
+  EnvEntry e;
+  e.name = "pendulum";
+  e.help = "Gymnasium Pendulum-v1 swing-up (no constraints)";
+  e.supports_atacom = false;
+  e.default_config = []() { return nlohmann::json(default_pendulum_model()); };
+  e.make = [](const nlohmann::json& cfg, int num_envs, bool atacom) -> std::unique_ptr<BatchEnv> {
+    if (atacom) throw std::invalid_argument("env 'pendulum' has no constraint model, so ATACOM cannot wrap it");
+    return std::make_unique<PendulumEnv>(cfg.get<PendulumModel>(), num_envs);
+  };
+  return e;
+}
+
+}  // namespace atacom

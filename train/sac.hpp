@@ -1,0 +1,124 @@
+// Soft Actor-Critic (Haarnoja et al. 2018) with automatic temperature.
+//
+// Networks: twin Q critics as one 2-member ensemble Mlp over concat(obs, a)
+// with a Polyak-averaged target copy; a tanh-squashed Gaussian actor, one Mlp
+// with 2 * act_dim outputs (mean, log-std clamped to [log_std_min,
+// log_std_max]). One update (in the order of the paper's code):
+//   1. actor and temperature (once the replay holds more than `warmup`):
+//      L_pi = mean(alpha log pi(a~|s) - min_i Q_i(s, a~)),
+//      L_alpha = -log_alpha * mean(log pi + target_entropy)
+//   2. critics: y = r + gamma (1 - terminated) (min_i Q'_i(s', a') - alpha log pi(a'|s')),
+//      L_Q = sum_i mean((Q_i(s, a) - y)^2); truncation still bootstraps.
+//   3. target critics: Polyak with tau.
+// Actions are in [-1, 1]^act_dim (the env contract). Observations reaching the
+// agent are already normalised by the trainer when obs_norm is on.
+#pragma once
+#include <cstdint>
+#include <iosfwd>
+#include <optional>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "train/adam.hpp"
+#include "train/autodiff.hpp"
+#include "train/mlp.hpp"
+#include "train/replay_buffer.hpp"
+#include "atacom/rng.hpp"
+
+namespace atacom {
+
+struct SacConfig {
+  MlpConfig actor;                        // actor trunk
+  MlpConfig critic;                       // each twin critic
+  int batch_size = 64;
+  double gamma = 0.99;
+  double tau = 1e-3;                      // Polyak rate of the target critics
+  double lr_actor = 3e-4;
+  double lr_critic = 3e-4;
+  double lr_alpha = 3e-4;
+  double init_alpha = 1.0;                // log_alpha starts at log(init_alpha)
+  std::optional<double> target_entropy;   // nullopt: -act_dim
+  double log_std_min = -20.0;
+  double log_std_max = 2.0;
+  int64_t replay_capacity = 200000;
+  int64_t initial_replay = 5000;          // critics update once replay size > this
+  int64_t warmup = 5000;                  // actor and alpha update once replay size > this
+  double updates_per_step = 1.0;          // gradient updates per env transition (may be < 1 or > 1)
+  bool obs_norm = true;                   // map obs bounds to [-1, 1] (clipped to +-10)
+  double grad_clip = 0.0;                 // max L2 norm of each network's gradient; 0: off
+  AdamConfig adam;
+};
+// The one default factory: the paper's settings (reference section 5):
+// 256-256 ReLU, batch 64, lr 3e-4, tau 1e-3, replay 200k, initial replay and
+// warmup 5000, gamma 0.995, lr_alpha 1e-6, MinMax observation normalisation.
+SacConfig default_sac_config();
+void to_json(nlohmann::json& j, const SacConfig& c);
+void from_json(const nlohmann::json& j, SacConfig& c);  // unknown keys and bad values rejected
+
+struct SacStats {
+  double actor_loss = 0, critic_loss = 0, alpha_loss = 0, entropy = 0, q_mean = 0;
+  bool actor_updated = false;
+};
+
+class Sac {
+ public:
+  Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed);
+
+  // Actions (N x act_dim) in [-1, 1] for obs (N x obs_dim). Stochastic
+  // actions draw row i's noise from rngs[i] (per-env streams); deterministic
+  // ones are tanh(mean). No allocation after the first call with this N.
+  // Non-finite observations give non-finite actions, which every env treats
+  // as 0 and counts (env contract).
+  void act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions);
+
+  // One gradient update on a sampled batch (B == batch_size).
+  SacStats update(const ReplayBatch& batch, bool update_actor);
+
+  double alpha() const;
+  double log_alpha() const { return log_alpha_; }
+  double target_entropy() const { return target_entropy_; }
+  const SacConfig& config() const { return cfg_; }
+  int obs_dim() const { return obs_dim_; }
+  int act_dim() const { return act_dim_; }
+  Rng& rng() { return rng_; }
+
+  Mlp<float>& actor() { return actor_; }
+  Mlp<float>& critic() { return critic_; }
+  Mlp<float>& critic_target() { return critic_target_; }
+  const Mlp<float>& actor() const { return actor_; }
+  const Mlp<float>& critic() const { return critic_; }
+  const Mlp<float>& critic_target() const { return critic_target_; }
+
+  // FNV-1a hash over every learned value (networks, targets, Adam moments,
+  // temperature, RNG): equal hashes mean bitwise equal agents.
+  uint64_t state_hash() const;
+  // Everything the agent learned or drew, for checkpoints.
+  void save(std::ostream& out) const;
+  void load(std::istream& in);  // throws on shape mismatch or truncation
+
+  // Memory requests of the update and act tapes (constant after warm-up).
+  size_t allocations() const { return tape_.allocations() + actor_tape_.allocations() + act_tape_.allocations(); }
+  double gemm_flops() const { return tape_.gemm_flops() + actor_tape_.gemm_flops() + act_tape_.gemm_flops(); }
+
+ private:
+  // Policy head on the tape: returns (action, log_prob) ids for obs id.
+  struct PolicyOut { Tape<float>::Id action, logp; };
+  PolicyOut policy(Tape<float>& tape, Tape<float>::Id obs, const float* noise, bool param_grads);
+
+  SacConfig cfg_;
+  int obs_dim_, act_dim_;
+  double target_entropy_;
+  Mlp<float> actor_, critic_, critic_target_;
+  Adam<float> actor_opt_, critic_opt_;
+  Adam<double> alpha_opt_;
+  double log_alpha_ = 0.0;
+  Rng rng_;  // update noise
+  Tape<float> tape_, actor_tape_, act_tape_;  // critic phase, actor phase, act()
+  std::vector<float> noise_pi_;    // (B x act_dim) reparameterisation noise for the actor loss
+  std::vector<float> noise_next_;  // (B x act_dim) noise for a' ~ pi(s')
+  std::vector<float> y_;           // (B) critic targets
+  std::vector<float> act_noise_;   // (N x act_dim) scratch for act()
+};
+
+}  // namespace atacom
