@@ -11,6 +11,7 @@
 
 #include "atacom/env_registry.hpp"
 #include "envs/nav/nav_env.hpp"
+#include "src/core/data_dir.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/safe_env.hpp"
@@ -126,7 +127,7 @@ TEST_CASE("nav env: config strict JSON round trip and validation", "[nav_env]") 
 }
 
 TEST_CASE("nav env: defaults agree with the robot data files", "[nav_env]") {
-  const std::string dir = ATACOM_DEFAULT_DATA_DIR;
+  const std::string dir = data_dir();
   std::ifstream ft(dir + "/robots/tiago_base.json"), ff(dir + "/robots/fetch_base.json");
   REQUIRE(ft.good());
   REQUIRE(ff.good());
