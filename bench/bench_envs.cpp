@@ -40,7 +40,7 @@ struct Run {
   int next = 0;
 
   Run(const std::string& name, int N, bool atacom) {
-    env = make_env({name, N, atacom, nlohmann::json::object()});
+    env = make_env({name, N, atacom ? SafetyLayer::Atacom : SafetyLayer::None, nlohmann::json::object()});
     env->seed(1);
     const int m = env->spec().act_dim;
     Rng rng(2, 0);
@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (envs.empty())
     for (const EnvEntry& e : env_entries())
-      if (e.supports_atacom) envs.push_back(e.name);
+      if (e.has_constraints) envs.push_back(e.name);
   std::vector<bool> modes;
   if (atacom_s != "on") modes.push_back(false);
   if (atacom_s != "off") modes.push_back(true);

@@ -70,9 +70,10 @@ nlohmann::json resolve_env_config(const std::string& name, const nlohmann::json&
 std::unique_ptr<BatchEnv> make_env(const EnvRequest& request) {
   const EnvEntry& e = env_entry(request.name);
   if (request.num_envs < 1) throw std::invalid_argument("number of envs must be >= 1");
-  if (request.atacom && !e.supports_atacom)
-    throw std::invalid_argument("env '" + request.name + "' has no constraint model, so ATACOM cannot wrap it");
-  return e.make(resolve_env_config(request.name, request.config), request.num_envs, request.atacom);
+  if (request.safety != SafetyLayer::None && !e.has_constraints)
+    throw std::invalid_argument("env '" + request.name + "' has no constraint model, so the " +
+                                safety_layer_title(request.safety) + " safety layer cannot wrap it");
+  return wrap_safety(e.make(resolve_env_config(request.name, request.config), request.num_envs), request.safety);
 }
 
 }  // namespace atacom

@@ -300,7 +300,7 @@ struct RolloutStats {
 // Uniform random alpha for `steps` batched steps through the registry's env,
 // with SafeEnv (ATACOM) between the policy and the env or without it.
 RolloutStats random_rollout(ArmTask task, int N, int steps, uint64_t seed, bool atacom) {
-  std::unique_ptr<BatchEnv> env = make_env({arm_task_name(task), N, atacom, nlohmann::json::object()});
+  std::unique_ptr<BatchEnv> env = make_env({arm_task_name(task), N, atacom ? SafetyLayer::Atacom : SafetyLayer::None, nlohmann::json::object()});
   env->seed(seed);
   Rng rng(seed, 1u << 20);
   const EnvSpec& spec = env->spec();

@@ -56,7 +56,7 @@ LaResult run_la(bool atacom) {
   EnvRequest req;
   req.name = "nav";
   req.num_envs = N;
-  req.atacom = atacom;
+  req.safety = atacom ? SafetyLayer::Atacom : SafetyLayer::None;
   auto env = make_env(req);
   env->seed(9);
   const NavAttractorParams p = default_nav_attractor_params();

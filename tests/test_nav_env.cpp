@@ -580,7 +580,7 @@ CollisionTally random_alpha_rollout(bool atacom, uint64_t seed) {
   EnvRequest req;
   req.name = "nav";
   req.num_envs = N;
-  req.atacom = atacom;
+  req.safety = atacom ? SafetyLayer::Atacom : SafetyLayer::None;
   std::unique_ptr<BatchEnv> env = make_env(req);
   env->seed(seed);
   const size_t ni = env->spec().info_names.size();
@@ -639,7 +639,7 @@ TEST_CASE("nav env: registry builds the plain and the ATACOM-wrapped env", "[nav
   req.num_envs = 8;
   auto plain = make_env(req);
   REQUIRE(dynamic_cast<NavEnv*>(plain.get()) != nullptr);
-  req.atacom = true;
+  req.safety = SafetyLayer::Atacom;
   req.config = {{"constraints", {{"fetch_beta", 2.0}}}, {"horizon", 100}};
   auto safe = make_env(req);
   auto* wrapped = dynamic_cast<SafeEnv*>(safe.get());
@@ -665,7 +665,7 @@ TEST_CASE("nav env: with ATACOM, snapshot/restore and thread counts give identic
     EnvRequest req;
     req.name = "nav";
     req.num_envs = 40;
-    req.atacom = true;
+    req.safety = SafetyLayer::Atacom;
     auto env = make_env(req);
     env->seed(5);
     std::vector<double> a;
@@ -703,7 +703,7 @@ TEST_CASE("nav env: steady-state steps do not grow the heap", "[nav_env]") {
     EnvRequest req;
     req.name = "nav";
     req.num_envs = 256;
-    req.atacom = atacom;
+    req.safety = atacom ? SafetyLayer::Atacom : SafetyLayer::None;
     auto env = make_env(req);
     env->seed(2);
     std::vector<double> a;

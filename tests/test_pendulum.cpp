@@ -157,7 +157,7 @@ TEST_CASE("pendulum: registry entry, strict config, no ATACOM", "[pendulum]") {
   req.config = {{"horizon", 0}};
   REQUIRE_THROWS_WITH(atacom::make_env(req), Catch::Contains("horizon"));
   req.config = nlohmann::json::object();
-  req.atacom = true;
+  req.safety = atacom::SafetyLayer::Atacom;
   REQUIRE_THROWS_WITH(atacom::make_env(req), Catch::Contains("ATACOM"));
   atacom::PendulumModel m = atacom::default_pendulum_model();
   m.max_speed = 6.5;

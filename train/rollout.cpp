@@ -16,7 +16,7 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
     throw std::invalid_argument("unknown policy '" + cfg.policy + "' (random, zero)");
   if (cfg.envs < 1) throw std::invalid_argument("--envs must be >= 1");
   if (cfg.steps < 1) throw std::invalid_argument("--steps must be >= 1");
-  auto env = make_env(EnvRequest{cfg.env, cfg.envs, cfg.atacom, cfg.env_config});
+  auto env = make_env(EnvRequest{cfg.env, cfg.envs, cfg.atacom ? SafetyLayer::Atacom : SafetyLayer::None, cfg.env_config});
   const EnvSpec& spec = env->spec();
   const int N = cfg.envs, m = spec.act_dim, k = spec.num_constraints;
   env->seed(cfg.seed);

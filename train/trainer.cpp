@@ -73,7 +73,7 @@ RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* trai
   // file's keys (top-level keys replace, so "target_entropy": null still works).
   nlohmann::json sac = default_sac_config();
   if (const auto per_env = env_entry(c.train.env).default_sac) {
-    const nlohmann::json d = per_env(c.train.algo);
+    const nlohmann::json d = per_env(c.train.algo == "atacom-sac" ? SafetyLayer::Atacom : SafetyLayer::None);
     for (auto it = d.begin(); it != d.end(); ++it) sac[it.key()] = it.value();
   }
   if (s) {
@@ -289,9 +289,9 @@ class Run {
 Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts) {
   const TrainConfig& t = cfg_.train;
   validate(t);
-  const bool atacom = t.algo == "atacom-sac";
-  env_ = make_env(EnvRequest{t.env, t.num_envs, atacom, cfg_.env});
-  eval_env_ = make_env(EnvRequest{t.env, t.eval_episodes, atacom, cfg_.env});
+  const SafetyLayer safety = t.algo == "atacom-sac" ? SafetyLayer::Atacom : SafetyLayer::None;
+  env_ = make_env(EnvRequest{t.env, t.num_envs, safety, cfg_.env});
+  eval_env_ = make_env(EnvRequest{t.env, t.eval_episodes, safety, cfg_.env});
   spec_ = env_->spec();
   N_ = t.num_envs;
   D_ = spec_.obs_dim;
@@ -714,7 +714,7 @@ std::unique_ptr<TrainedPolicy> TrainedPolicy::load(const std::string& run_dir) {
   tp->impl_ = std::make_unique<Impl>();
   const TrainConfig& t = tp->cfg_.train;
   // The env as training built it (ATACOM adds info columns), for the spec only.
-  const auto env = make_env(EnvRequest{t.env, 1, t.algo == "atacom-sac", tp->cfg_.env});
+  const auto env = make_env(EnvRequest{t.env, 1, t.algo == "atacom-sac" ? SafetyLayer::Atacom : SafetyLayer::None, tp->cfg_.env});
   const EnvSpec& spec = env->spec();
   tp->impl_->norm.init(spec, tp->cfg_.sac.obs_norm);
   tp->impl_->sac = std::make_unique<Sac>(spec.obs_dim, spec.act_dim, tp->cfg_.sac, uint64_t(t.seed));

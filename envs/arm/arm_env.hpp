@@ -31,6 +31,7 @@
 #include "envs/arm/arm_scene.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/safe_env.hpp"
+#include "atacom/safety_layer.hpp"
 #include "envs/arm/tiago_kinematics.hpp"
 #include "envs/arm/tiago_model.hpp"
 
@@ -176,10 +177,10 @@ class ArmEnv final : public ControlAffineEnv {
 };
 
 // Registry hooks (envs/registry.cpp).
-nlohmann::json arm_sac_defaults(const std::string& algo);  // per-env SAC settings (reference 5.4)
+nlohmann::json arm_sac_defaults(SafetyLayer safety);  // per-env SAC settings (reference 5.4)
 nlohmann::json table_env_default_config();
 nlohmann::json shelf_env_default_config();
-std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs, bool atacom);
-std::unique_ptr<BatchEnv> make_shelf_env(const nlohmann::json& config, int num_envs, bool atacom);
+std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs);
+std::unique_ptr<BatchEnv> make_shelf_env(const nlohmann::json& config, int num_envs);
 
 }  // namespace atacom

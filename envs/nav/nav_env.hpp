@@ -219,9 +219,8 @@ class NavEnv final : public ControlAffineEnv {
   std::vector<double> profile_acc_;  // (num_blocks x 2) seconds per block and section
 };
 
-// Registry factory: resolved JSON config -> NavEnv, wrapped in SafeEnv when
-// atacom is true.
+// Registry factory: resolved JSON config -> NavEnv.
 nlohmann::json nav_default_config_json();
-std::unique_ptr<BatchEnv> make_nav_env(const nlohmann::json& config, int num_envs, bool atacom);
+std::unique_ptr<BatchEnv> make_nav_env(const nlohmann::json& config, int num_envs);
 
 }  // namespace atacom

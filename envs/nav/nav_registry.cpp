@@ -1,17 +1,14 @@
-// Registry glue for NavEnv: the factory (plain or wrapped in SafeEnv).
+// Registry glue for NavEnv: the factory of the plain env (make_env adds the safety layer).
 #include <nlohmann/json.hpp>
 
 #include "envs/nav/nav_env.hpp"
 
 namespace atacom {
 
-std::unique_ptr<BatchEnv> make_nav_env(const nlohmann::json& config, int num_envs, bool atacom) {
+std::unique_ptr<BatchEnv> make_nav_env(const nlohmann::json& config, int num_envs) {
   NavConfig c;
   from_json(config, c);
-  auto env = std::make_unique<NavEnv>(c, num_envs);
-  if (!atacom) return env;
-  const ProjectorModel model = env->projector_model();
-  return std::make_unique<SafeEnv>(std::move(env), model);
+  return std::make_unique<NavEnv>(c, num_envs);
 }
 
 }  // namespace atacom

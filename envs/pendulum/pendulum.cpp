@@ -190,10 +190,9 @@ EnvEntry pendulum_env_entry() {
   EnvEntry e;
   e.name = "pendulum";
   e.help = "Gymnasium Pendulum-v1 swing-up (no constraints)";
-  e.supports_atacom = false;
+  e.has_constraints = false;
   e.default_config = []() { return nlohmann::json(default_pendulum_model()); };
-  e.make = [](const nlohmann::json& cfg, int num_envs, bool atacom) -> std::unique_ptr<BatchEnv> {
-    if (atacom) throw std::invalid_argument("env 'pendulum' has no constraint model, so ATACOM cannot wrap it");
+  e.make = [](const nlohmann::json& cfg, int num_envs) -> std::unique_ptr<BatchEnv> {
     return std::make_unique<PendulumEnv>(cfg.get<PendulumModel>(), num_envs);
   };
   return e;

@@ -9,26 +9,28 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env.hpp"
+#include "atacom/safety_layer.hpp"
 
 namespace atacom {
 
 struct EnvRequest {
   std::string name;                                   // "pendulum", "table", "shelf", "nav", ...
   int num_envs = 1;                                   // N
-  bool atacom = false;                                // wrap in SafeEnv (ATACOM between agent and env)
+  SafetyLayer safety = SafetyLayer::None;             // wrapper between the action source and the env
   nlohmann::json config = nlohmann::json::object();   // overrides of default_env_config(name)
 };
 
 struct EnvEntry {
   std::string name;
   std::string help;
-  bool supports_atacom = false;
+  bool has_constraints = false;  // a ControlAffineEnv: every safety layer can wrap it
   nlohmann::json (*default_config)();
-  std::unique_ptr<BatchEnv> (*make)(const nlohmann::json& resolved_config, int num_envs, bool atacom);
-  // Optional per-env SAC settings for an algo ("sac" or "atacom-sac"): a JSON
-  // object of SacConfig keys laid over default_sac_config() before a run
-  // config's own "sac" section (nullptr: the global defaults).
-  nlohmann::json (*default_sac)(const std::string& algo) = nullptr;
+  // The plain env; make_env() adds the safety layer.
+  std::unique_ptr<BatchEnv> (*make)(const nlohmann::json& resolved_config, int num_envs);
+  // Optional per-env SAC settings under a safety layer: a JSON object of
+  // SacConfig keys laid over default_sac_config() before a run config's own
+  // "sac" section (nullptr: the global defaults).
+  nlohmann::json (*default_sac)(SafetyLayer safety) = nullptr;
 };
 
 // All registered envs (envs/registry.cpp lists them).
