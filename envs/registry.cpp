@@ -2,7 +2,9 @@
 
 #include <stdexcept>
 
+#include "envs/arm/arm_attractor.hpp"
 #include "envs/arm/arm_env.hpp"
+#include "envs/nav/nav_attractor.hpp"
 #include "envs/nav/nav_env.hpp"
 #include "envs/pendulum/pendulum.hpp"
 
@@ -12,11 +14,11 @@ namespace atacom {
 const std::vector<EnvEntry>& env_entries() {
   static const std::vector<EnvEntry> entries = {
       {"table", "TableEnv: TIAGo++ arm reaching above a table (34 constraints)", true, table_env_default_config,
-       make_table_env, arm_sac_defaults},
+       make_table_env, arm_sac_defaults, make_table_attractor},
       {"shelf", "ShelfEnvSim: TIAGo++ arm reaching into a shelf (34 constraints)", true, shelf_env_default_config,
-       make_shelf_env, arm_sac_defaults},
+       make_shelf_env, arm_sac_defaults, make_shelf_attractor},
       {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
-       &nav_default_config_json, &make_nav_env},
+       &nav_default_config_json, &make_nav_env, nullptr, make_nav_attractor},
       pendulum_env_entry(),
   };
   return entries;
@@ -65,6 +67,17 @@ nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::j
 
 nlohmann::json resolve_env_config(const std::string& name, const nlohmann::json& overrides) {
   return merge_config_strict(env_entry(name).default_config(), overrides, "");
+}
+
+std::unique_ptr<Policy> make_attractor_policy(const std::string& env, const nlohmann::json& resolved_env_config) {
+  const EnvEntry& e = env_entry(env);
+  if (e.make_attractor == nullptr) {
+    std::string with;
+    for (const auto& x : env_entries())
+      if (x.make_attractor) with += (with.empty() ? "" : ", ") + x.name;
+    throw std::invalid_argument("env '" + env + "' has no linear attractor (envs with one: " + with + ")");
+  }
+  return e.make_attractor(resolved_env_config);
 }
 
 std::unique_ptr<BatchEnv> make_env(const EnvRequest& request) {

@@ -12,6 +12,7 @@
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/trainer.hpp"
+#include "train/sac.hpp"
 
 using namespace atacom;
 
@@ -377,25 +378,26 @@ TEST_CASE("set_state places an env and refreshes its model and observation", "[a
 
 TEST_CASE("table/shelf: per-env SAC defaults (reference 5.4) under the run config", "[arm_env]") {
   for (const char* env : {"table", "shelf"}) {
-    RunConfig c = resolve_run_config({{"train", {{"env", env}, {"algo", "atacom-sac"}}}});
-    CHECK(c.sac.lr_actor == 3e-4);
-    CHECK(c.sac.lr_critic == 3e-4);
-    CHECK(c.sac.lr_alpha == 1e-6);
-    REQUIRE(c.sac.target_entropy.has_value());
-    CHECK(*c.sac.target_entropy == -10.0);
-    c = resolve_run_config({{"train", {{"env", env}, {"algo", "sac"}}}});
-    CHECK(c.sac.lr_actor == 1e-5);
-    CHECK(c.sac.lr_critic == 1e-5);
+    RunConfig rc = resolve_run_config({{"train", {{"env", env}, {"algo", "atacom-sac"}}}});
+    SacConfig c = rc.learner.get<SacConfig>();  // the "sac" section the SAC learner owns
+    CHECK(c.lr_actor == 3e-4);
+    CHECK(c.lr_critic == 3e-4);
+    CHECK(c.lr_alpha == 1e-6);
+    REQUIRE(c.target_entropy.has_value());
+    CHECK(*c.target_entropy == -10.0);
+    c = resolve_run_config({{"train", {{"env", env}, {"algo", "sac"}}}}).learner.get<SacConfig>();
+    CHECK(c.lr_actor == 1e-5);
+    CHECK(c.lr_critic == 1e-5);
     // The file's keys win over the env's; null target entropy means -act_dim.
     c = resolve_run_config({{"train", {{"env", env}, {"algo", "sac"}}},
-                            {"sac", {{"lr_actor", 2e-4}, {"target_entropy", nullptr}}}});
-    CHECK(c.sac.lr_actor == 2e-4);
-    CHECK(c.sac.lr_critic == 1e-5);
-    CHECK(!c.sac.target_entropy.has_value());
+                            {"sac", {{"lr_actor", 2e-4}, {"target_entropy", nullptr}}}}).learner.get<SacConfig>();
+    CHECK(c.lr_actor == 2e-4);
+    CHECK(c.lr_critic == 1e-5);
+    CHECK(!c.target_entropy.has_value());
     CHECK_THROWS_WITH(resolve_run_config({{"train", {{"env", env}}}, {"sac", {{"lr_actr", 1.0}}}}),
                       Catch::Contains("lr_actr"));
   }
   // Envs without their own defaults keep the global ones.
   const RunConfig p = resolve_run_config({{"train", {{"env", "pendulum"}}}});
-  CHECK(p.sac.lr_actor == default_sac_config().lr_actor);
+  CHECK(p.learner.get<SacConfig>().lr_actor == default_sac_config().lr_actor);
 }

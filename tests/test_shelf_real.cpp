@@ -2,6 +2,7 @@
 // attractor with and without ATACOM.
 #include <catch2/catch.hpp>
 
+#include "envs/arm/arm_attractor.hpp"
 #include "envs/arm/shelf_real.hpp"
 
 using namespace atacom;
@@ -11,8 +12,8 @@ TEST_CASE("shelf-real protocol: zero policy never succeeds and never collides", 
   c.trials = 6;
   c.max_time_per_target = 3.0;
   c.hold_time = 0.5;
-  const ShelfRealResult r = evaluate_shelf_real(default_arm_env_config(ArmTask::Shelf), c,
-                                                [](const float*, int N, double* a) { std::fill(a, a + N * 7, 0.0); });
+  const auto zero = make_zero_policy(kArmObsDim, kArmJoints);
+  const ShelfRealResult r = evaluate_shelf_real(default_arm_env_config(ArmTask::Shelf), c, *zero);
   REQUIRE(r.targets.size() == 2);
   for (const ShelfRealTarget& t : r.targets) {
     CHECK(t.success_rate == 0.0);
@@ -24,11 +25,11 @@ TEST_CASE("shelf-real protocol: zero policy never succeeds and never collides", 
 
 TEST_CASE("shelf-real protocol: linear attractor through ATACOM reaches targets safely", "[shelf_real]") {
   const ArmEnvConfig ec = default_arm_env_config(ArmTask::Shelf);
-  ArmEnv probe(ec, 1);
+  ArmAttractorPolicy la(ec);
   ShelfRealConfig c = default_shelf_real_config();
   c.trials = 12;
   c.seed = 4;
-  const ShelfRealResult safe = evaluate_shelf_real(ec, c, make_linear_attractor_policy(probe));
+  const ShelfRealResult safe = evaluate_shelf_real(ec, c, la);
   CHECK(safe.total_collisions == 0);
   CHECK(safe.max_constraint_violations == 0);
   for (const ShelfRealTarget& t : safe.targets) {
@@ -37,14 +38,13 @@ TEST_CASE("shelf-real protocol: linear attractor through ATACOM reaches targets 
     CHECK(t.time_mean <= c.max_time_per_target);
   }
   c.atacom = false;
-  const ShelfRealResult raw = evaluate_shelf_real(ec, c, make_linear_attractor_policy(probe));
+  const ShelfRealResult raw = evaluate_shelf_real(ec, c, la);
   CHECK(raw.total_collisions > 0);  // the straight-line attractor drives into the shelf
 }
 
 TEST_CASE("shelf-real protocol rejects bad settings", "[shelf_real]") {
   ShelfRealConfig c = default_shelf_real_config();
   c.hold_time = 20.0;
-  CHECK_THROWS_AS(evaluate_shelf_real(default_arm_env_config(ArmTask::Shelf), c,
-                                      [](const float*, int, double*) {}),
-                  std::invalid_argument);
+  const auto zero = make_zero_policy(kArmObsDim, kArmJoints);
+  CHECK_THROWS_AS(evaluate_shelf_real(default_arm_env_config(ArmTask::Shelf), c, *zero), std::invalid_argument);
 }

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "atacom/env_registry.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/trainer.hpp"
 
@@ -78,8 +79,14 @@ TEST_CASE("trainer: run directory outputs", "[trainer]") {
   std::string header, row;
   std::getline(csv, header);
   std::string expect;
-  for (const auto& c : atacom::progress_columns({"abs_theta", "nonfinite_action"})) expect += (expect.empty() ? "" : ",") + c;
+  const auto spec = atacom::make_env(atacom::EnvRequest{"pendulum", 1}).get()->spec();
+  for (const auto& c : atacom::progress_columns(spec, {"alpha", "actor_loss", "critic_loss", "alpha_loss", "entropy",
+                                                       "q_mean"}))
+    expect += (expect.empty() ? "" : ",") + c;
   REQUIRE(header == expect);
+  REQUIRE(header.rfind("env_steps,updates,wall_s,eval_return_mean,eval_return_std,train_episode_return,alpha,actor_loss,"
+                       "critic_loss,alpha_loss,entropy,q_mean,abs_theta,nonfinite_action,early_terminations,"
+                       "avg_episode_steps,violations,", 0) == 0);
   int rows = 0;
   while (std::getline(csv, row)) ++rows;
   REQUIRE(rows == 2);
@@ -317,7 +324,7 @@ TEST_CASE("trainer: a run's policy loads from its directory and acts like the tr
   atacom::TrainedPolicy::load(dir)->act(obs.data(), 3, a3.data());
   CHECK(a1 == a3);
   CHECK_THROWS_WITH(atacom::TrainedPolicy::load(dir + "_missing"), Catch::Contains("config.json"));
-  std::ofstream(dir + "/checkpoint.bin", std::ios::trunc) << "garbage";
+  std::ofstream(dir + "/policy_final.bin", std::ios::trunc) << "garbage";  // the policy lives here, not in the checkpoint
   CHECK_THROWS(atacom::TrainedPolicy::load(dir));
   fs::remove_all(dir);
 }

@@ -7,18 +7,46 @@
 
 #include "atacom/env_registry.hpp"
 #include "atacom/parallel.hpp"
+#include "atacom/policy.hpp"
 #include "atacom/rng.hpp"
 
 namespace atacom {
 
 nlohmann::json run_rollout(const RolloutConfig& cfg) {
-  if (cfg.policy != "random" && cfg.policy != "zero")
-    throw std::invalid_argument("unknown policy '" + cfg.policy + "' (random, zero)");
   if (cfg.envs < 1) throw std::invalid_argument("--envs must be >= 1");
   if (cfg.steps < 1) throw std::invalid_argument("--steps must be >= 1");
-  auto env = make_env(EnvRequest{cfg.env, cfg.envs, cfg.atacom ? SafetyLayer::Atacom : SafetyLayer::None, cfg.env_config});
+  const bool trained = cfg.policy == "trained";
+  if (!trained && !cfg.run_dir.empty())
+    throw std::invalid_argument("--run applies to --policy trained only (the policy is '" + cfg.policy + "')");
+  std::string env_name = cfg.env;
+  nlohmann::json env_config = cfg.env_config;
+  SafetyLayer safety = cfg.safety.value_or(SafetyLayer::Atacom);
+  std::unique_ptr<TrainedPolicy> tp;
+  if (trained) {
+    if (cfg.run_dir.empty()) throw std::invalid_argument("--policy trained needs --run DIR (a training run directory)");
+    tp = TrainedPolicy::load(cfg.run_dir, cfg.which);
+    const TrainConfig& t = tp->config().train;
+    if (!env_name.empty() && env_name != t.env)
+      throw std::invalid_argument("--env " + env_name + " differs from the env of run '" + cfg.run_dir + "' (" + t.env + ")");
+    if (!env_config.is_null() && !(env_config.is_object() && env_config.empty()))
+      throw std::invalid_argument("env config overrides do not apply to --policy trained: the run's env config is used");
+    env_name = t.env;
+    env_config = tp->config().env;
+    safety = cfg.safety.value_or(tp->safety());
+  }
+  if (env_name.empty()) throw std::invalid_argument("rollout needs an env name (--env)");
+  auto env = make_env(EnvRequest{env_name, cfg.envs, safety, env_config});
   const EnvSpec& spec = env->spec();
   const int N = cfg.envs, m = spec.act_dim, k = spec.num_constraints;
+  std::unique_ptr<Policy> own;
+  Policy* policy = tp.get();
+  if (cfg.policy == "random") own = make_random_policy(spec.obs_dim, m);
+  else if (cfg.policy == "zero") own = make_zero_policy(spec.obs_dim, m);
+  else if (cfg.policy == "la") own = make_attractor_policy(env_name, resolve_env_config(env_name, env_config));
+  else if (!trained) throw std::invalid_argument("unknown policy '" + cfg.policy + "' (random, zero, la, trained)");
+  if (own) policy = own.get();
+  if (policy->obs_dim() != spec.obs_dim || policy->act_dim() != m)
+    throw std::invalid_argument("the policy's obs/act dims do not fit env '" + env_name + "'");
   env->seed(cfg.seed);
 
   // Per-env action streams, distinct from the env's own streams.
@@ -41,9 +69,7 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   const auto t0 = std::chrono::steady_clock::now();
   for (long r = 0; r < rounds; ++r) {
     const int active = static_cast<int>(std::min<long>(N, cfg.steps - done_steps));
-    if (cfg.policy == "random")
-      for (int i = 0; i < N; ++i)
-        for (int j = 0; j < m; ++j) actions[size_t(i) * m + j] = rng[i].uniform(-1.0, 1.0);
+    policy->act(env->buffers().obs.data(), N, true, rng.data(), actions.data());
     env->step(actions.data());
     const EnvBuffers& b = env->buffers();
     // The last round may overshoot the requested total: count only `active` envs.
@@ -67,9 +93,10 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
     done_steps += active;
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  nlohmann::json out = {{"env", cfg.env},
+  nlohmann::json out = {{"env", env_name},
                         {"policy", cfg.policy},
-                        {"atacom", cfg.atacom},
+                        {"safety", safety_layer_name(safety)},
+                        {"atacom", safety == SafetyLayer::Atacom},
                         {"envs", N},
                         {"seed", cfg.seed},
                         {"threads", num_threads()},
@@ -85,6 +112,12 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   for (size_t c = 0; c < collision_cols.size(); ++c) {
     const std::string& name = spec.info_names[collision_cols[c]];
     out[name + "s"] = static_cast<long>(std::llround(collision_sums[c]));
+  }
+  if (tp) {
+    out["run"] = cfg.run_dir;
+    out["run_algo"] = tp->config().train.algo;
+    out["run_safety"] = safety_layer_name(tp->safety());
+    out["run_policy"] = run_policy_file(cfg.which);
   }
   return out;
 }

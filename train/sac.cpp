@@ -127,12 +127,14 @@ Sac::PolicyOut Sac::policy(Tape<float>& t, Tape<float>::Id obs, const float* noi
   return {t.tanh(u), t.tanh_gauss_logp(mu, log_std, u)};
 }
 
-void Sac::act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions) {
-  const int A = act_dim_;
-  act_tape_.clear();
-  const auto out = actor_.forward(act_tape_, act_tape_.constant(obs, N, obs_dim_), false);
-  const float* o = act_tape_.value(out).data;
-  const float lo = float(cfg_.log_std_min), hi = float(cfg_.log_std_max);
+void sac_actor_act(Mlp<float>& actor, Tape<float>& tape, double log_std_min, double log_std_max,
+                   const float* obs, int N, bool deterministic, Rng* rngs, double* actions) {
+  const int A = actor.out() / 2;
+  tape.clear();
+  // param_grads = false: the weights are only read.
+  const auto out = actor.forward(tape, tape.constant(obs, N, actor.in()), false);
+  const float* o = tape.value(out).data;
+  const float lo = float(log_std_min), hi = float(log_std_max);
   // Per-row noise from the row's own stream: any block partition gives the same actions.
   parallel_blocks(N, 1024, [&](int64_t b, int64_t e) {
     for (int64_t i = b; i < e; ++i) {
@@ -147,6 +149,10 @@ void Sac::act(const float* obs, int N, bool deterministic, Rng* rngs, double* ac
       }
     }
   });
+}
+
+void Sac::act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions) {
+  sac_actor_act(actor_, act_tape_, cfg_.log_std_min, cfg_.log_std_max, obs, N, deterministic, rngs, actions);
 }
 
 SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {

@@ -56,6 +56,14 @@ SacConfig default_sac_config();
 void to_json(nlohmann::json& j, const SacConfig& c);
 void from_json(const nlohmann::json& j, SacConfig& c);  // unknown keys and bad values rejected
 
+// The actor's action for obs (N x obs_dim, already normalised): tanh(mean)
+// when deterministic, else tanh(mean + std * n) with n from rngs[i] for row
+// i. `actor` has 2 * act_dim outputs (mean, log-std clamped to
+// [log_std_min, log_std_max]); `tape` is the caller's scratch. Sac::act and
+// the SAC policy of a run directory both act through this one function.
+void sac_actor_act(Mlp<float>& actor, Tape<float>& tape, double log_std_min, double log_std_max,
+                   const float* obs, int N, bool deterministic, Rng* rngs, double* actions);
+
 struct SacStats {
   double actor_loss = 0, critic_loss = 0, alpha_loss = 0, entropy = 0, q_mean = 0;
   bool actor_updated = false;

@@ -321,6 +321,7 @@ void ArmEnv::build_spec() {
   s.act_dim = kArmJoints;
   s.dt = config_.dt;
   s.horizon = config_.horizon;
+  s.gamma = 0.995;  // the task's discount (reference 5.3)
   s.num_constraints = kArmRows;
   s.obs_low.clear();
   s.obs_high.clear();

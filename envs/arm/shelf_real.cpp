@@ -4,8 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Dense>
-
 #include "atacom/projector.hpp"
 
 namespace atacom {
@@ -51,9 +49,11 @@ void mean_std(const std::vector<double>& v, double& mean, double& sd) {
 }
 }  // namespace
 
-ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfRealConfig& cfg,
-                                    const BatchPolicy& policy) {
+ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfRealConfig& cfg, Policy& policy) {
   if (cfg.trials < 1 || cfg.targets < 1) throw std::invalid_argument("shelf-real: trials and targets must be >= 1");
+  if (policy.obs_dim() != kArmObsDim || policy.act_dim() != kArmJoints)
+    throw std::invalid_argument("shelf-real: the " + policy.kind() + " policy does not fit the arm (obs/act dims " +
+                                std::to_string(policy.obs_dim()) + "/" + std::to_string(policy.act_dim()) + ")");
   if (!(cfg.success_radius > 0.0 && cfg.hold_time >= 0.0 && cfg.max_time_per_target > cfg.hold_time))
     throw std::invalid_argument("shelf-real: need success_radius > 0 and max_time_per_target > hold_time >= 0");
   ArmEnvConfig ec = env_config;
@@ -82,6 +82,8 @@ ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfR
   std::vector<uint8_t> dead(N, 0);  // trial ended by a collision
   std::vector<double> action(static_cast<size_t>(N) * kArmJoints);
   std::vector<float> obs(env.buffers().obs);
+  std::vector<Rng> rngs;
+  for (int e = 0; e < N; ++e) rngs.emplace_back(cfg.seed, (uint64_t{7} << 32) | uint64_t(e));
   for (int t = 0; t < cfg.targets; ++t) {
     for (int e = 0; e < N; ++e)
       if (!dead[e]) env.set_goal(e, &targets[(e * cfg.targets + t) * 3]);
@@ -98,7 +100,7 @@ ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfR
       for (int e = 0; e < N; ++e) active = active || (!dead[e] && done_at[e] < 0);
       if (!active) break;
       obs = env.buffers().obs;
-      policy(obs.data(), N, action.data());
+      policy.act(obs.data(), N, true, rngs.data(), action.data());
       if (cfg.atacom) {
         pb.alpha = action;
         env.constraint_model(pb, 0, N);
@@ -144,27 +146,6 @@ ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfR
     res.total_collisions += st.collisions;
   }
   return res;
-}
-
-BatchPolicy make_linear_attractor_policy(const ArmEnv& env) {
-  const TiagoArmModel model = env.model();
-  const std::vector<double> vmax = env.vmax();
-  return [model, vmax](const float* obs, int N, double* actions) {
-    for (int e = 0; e < N; ++e) {
-      const float* o = obs + static_cast<size_t>(e) * kArmObsDim;
-      ArmQ q;
-      for (int j = 0; j < kArmJoints; ++j) q(j) = o[j];
-      const Eigen::Vector3d goal(o[7], o[8], o[9]);
-      const ArmFkResult fk = arm_fk_reference(model, q);
-      // qdot = J^+ K (goal - p), K = I (the authors' gain); the right
-      // pseudo-inverse J^T (J J^T)^-1 with a tiny damping against singularities.
-      const Eigen::Matrix3d JJt = fk.J_grasp_pos * fk.J_grasp_pos.transpose() + 1e-6 * Eigen::Matrix3d::Identity();
-      const ArmQ qdot = fk.J_grasp_pos.transpose() * (JJt.inverse() * (goal - fk.grasp.p));
-      double scale = 1.0;
-      for (int j = 0; j < kArmJoints; ++j) scale = std::max(scale, std::abs(qdot(j)) / vmax[j]);
-      for (int j = 0; j < kArmJoints; ++j) actions[e * kArmJoints + j] = qdot(j) / (vmax[j] * scale);
-    }
-  };
 }
 
 }  // namespace atacom

@@ -5,23 +5,21 @@
 // has at most max_time_per_target. Reported per target, as in the paper's
 // table: final error, success rate, collisions and time.
 //
-// Trials run as a batch of envs (one env per trial). The policy is a callback
-// from observations to actions, so any policy (a trained actor, the linear
-// attractor, random) can be evaluated; with atacom the ATACOM projector sits
+// Trials run as a batch of envs (one env per trial). Any Policy (a run's
+// trained policy, the arm's linear attractor, random, zero) is evaluated
+// with its deterministic action (trial i's noise, for policies that draw,
+// from stream (seed, 7 << 32 | i)); with atacom the ATACOM projector sits
 // between the policy's alpha and the env, exactly as in training.
 #pragma once
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "atacom/policy.hpp"
 #include "envs/arm/arm_env.hpp"
 
 namespace atacom {
-
-// obs: (N x obs_dim) floats; actions: (N x act_dim) doubles to fill, in [-1, 1].
-using BatchPolicy = std::function<void(const float* obs, int N, double* actions)>;
 
 struct ShelfRealConfig {
   int trials = 25;                     // the paper ran 25
@@ -51,12 +49,9 @@ struct ShelfRealResult {
 void to_json(nlohmann::json& j, const ShelfRealResult& r);
 
 // Runs the protocol on a shelf env built from env_config (its horizon is
-// raised to cover all targets). Throws std::invalid_argument on bad settings.
-ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfRealConfig& config,
-                                    const BatchPolicy& policy);
-
-// The paper's Linear Attractor baseline on the arm: qdot = J_pos^+ (goal - p),
-// scaled to the action box (reads q and the goal from the observation).
-BatchPolicy make_linear_attractor_policy(const ArmEnv& env);
+// raised to cover all targets). Throws std::invalid_argument on bad settings
+// or a policy that does not fit the arm (16 observations, 7 actions).
+// The arm's linear attractor is ArmAttractorPolicy (envs/arm/arm_attractor.hpp).
+ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfRealConfig& config, Policy& policy);
 
 }  // namespace atacom

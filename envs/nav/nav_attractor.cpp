@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "envs/nav/fetch_policy.hpp"
+#include "envs/nav/nav_env.hpp"
 #include "src/core/config_json.hpp"
 
 namespace atacom {
@@ -42,6 +43,15 @@ void nav_linear_attractor(const NavAttractorParams& p, const float* obs, int obs
     actions[2 * i] = std::clamp(v / p.v_max, -1.0, 1.0);
     actions[2 * i + 1] = std::clamp(w / p.w_max, -1.0, 1.0);
   }
+}
+
+std::unique_ptr<Policy> make_nav_attractor(const nlohmann::json& resolved_config) {
+  NavConfig c;
+  from_json(resolved_config, c);
+  NavAttractorParams p = default_nav_attractor_params();
+  p.v_max = c.tiago.v_max;
+  p.w_max = c.tiago.w_max;
+  return std::make_unique<NavAttractorPolicy>(p, kNavObsDim);
 }
 
 }  // namespace atacom

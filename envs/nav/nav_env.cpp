@@ -126,6 +126,7 @@ NavEnv::NavEnv(const NavConfig& config, int num_envs) : cfg_(config) {
   for (int j = 0; j < kNavObsDim; ++j) spec_.obs_low[j] = -spec_.obs_high[j];
   spec_.dt = cfg_.dt;
   spec_.horizon = cfg_.horizon;
+  spec_.gamma = 0.995;  // the task's discount (reference 4.3.1)
   spec_.num_constraints = kNavConstraints;
   spec_.constraint_tolerance.assign(kNavConstraints, cfg_.constraints.violation_tolerance);
   spec_.constraint_names = {"wall_x_pos", "wall_y_pos", "wall_x_neg", "wall_y_neg", "fetch_clearance"};

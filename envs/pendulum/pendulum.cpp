@@ -59,6 +59,7 @@ PendulumEnv::PendulumEnv(const PendulumModel& model, int num_envs) : model_(mode
   spec_.obs_high = {1.0f, 1.0f, float(model.max_speed)};
   spec_.dt = model.dt;
   spec_.horizon = model.horizon;
+  spec_.gamma = 0.99;  // as configs/pendulum_sac.json
   spec_.info_names = {"abs_theta", "nonfinite_action"};
   spec_.info_reduce = {InfoReduce::Last, InfoReduce::Sum};
   buffers_.resize(spec_, num_envs);

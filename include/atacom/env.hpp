@@ -31,6 +31,7 @@ struct EnvSpec {
   std::vector<float> obs_low, obs_high;       // (obs_dim) bounds of the observation
   double dt = 0.0;                            // control period, s
   int horizon = 0;                            // steps before truncation
+  double gamma = 0.99;                        // the task's discount (evaluate()'s discounted return)
   int num_constraints = 0;                    // k: columns of EnvBuffers::constraints
   std::vector<double> constraint_tolerance;   // (k) a row violates when c > tolerance
   std::vector<std::string> constraint_names;  // (k)

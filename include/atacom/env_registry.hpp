@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env.hpp"
+#include "atacom/policy.hpp"
 #include "atacom/safety_layer.hpp"
 
 namespace atacom {
@@ -31,6 +32,10 @@ struct EnvEntry {
   // SacConfig keys laid over default_sac_config() before a run config's own
   // "sac" section (nullptr: the global defaults).
   nlohmann::json (*default_sac)(SafetyLayer safety) = nullptr;
+  // Optional: the family's linear attractor for a resolved config (raw
+  // observations in, the env's normalised action out; nullptr: none).
+  // Through a safety layer it is LA-ATACOM / LA-SafeLayer.
+  std::unique_ptr<Policy> (*make_attractor)(const nlohmann::json& resolved_config) = nullptr;
 };
 
 // All registered envs (envs/registry.cpp lists them).

@@ -1,18 +1,25 @@
-// Training loop: any registered env, SAC or ATACOM-SAC, with evaluation,
-// progress files, checkpoints and bitwise resume.
+// Training runs: any registered env, any algorithm of the table
+// (train/algorithms.hpp: an action source x a safety layer), with
+// evaluation, progress files, checkpoints and bitwise resume. The loop knows
+// the learner and policy contracts only (atacom/learner.hpp, policy.hpp).
 //
 // A run directory holds
-//   config.json    the full resolved config {"env": ..., "sac": ..., "train": ...}
-//   progress.csv   one row per evaluation (columns in progress_columns())
-//   progress.svg   eval return vs env steps, redrawn after every evaluation
-//   summary.json   final evaluation + run-wide training counters
-//   checkpoint.bin checkpoint (see checkpoint.hpp); checkpoint.json its manifest, for humans
-// env_steps counts transitions over all N envs. Updates run at
-// updates_per_step per transition; evaluation uses its own env batch and RNG
-// streams, so it never changes the training trajectory.
+//   config.json      the full resolved config {"env", "<learner section>", "train", "host"}
+//   progress.csv     one row per evaluation (columns: progress_columns())
+//   progress.svg     eval return vs env steps, redrawn after every evaluation
+//   summary.json     final evaluation, run-wide training counters, the best
+//                    evaluation ("best"), the policy files, the host
+//   checkpoint.bin   checkpoint (train/checkpoint.hpp); checkpoint.json its manifest
+//   policy_final.bin the policy at the end of training   (learning algorithms only)
+//   policy_best.bin  the policy of the best evaluation by eval_return_mean
+// env_steps counts transitions over all N envs. Evaluation uses its own env
+// batch and RNG streams (atacom/evaluate.hpp), so it never changes the
+// training trajectory. Algorithms without a learner (la, random, zero and
+// their safety-layer variants) train nothing: the run is one evaluation
+// (one progress row at env_steps 0, every train_* counter 0) with the same
+// files and keys, no checkpoint and no policy files.
 #pragma once
 #include <cstdint>
-#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <string>
@@ -20,15 +27,17 @@
 
 #include <nlohmann/json.hpp>
 
-#include "train/sac.hpp"
+#include "atacom/evaluate.hpp"
+#include "atacom/policy.hpp"
+#include "atacom/safety_layer.hpp"
 
 namespace atacom {
 
 struct TrainConfig {
   std::string env = "pendulum";   // registered env name
-  std::string algo = "sac";       // "sac" (plain env) or "atacom-sac" (env wrapped in ATACOM)
+  std::string algo = "sac";       // an algorithm of the table (train/algorithms.hpp)
   int64_t seed = 0;
-  int64_t steps = 100000;         // env transitions, all envs together
+  int64_t steps = 100000;         // env transitions, all envs together (learning algorithms)
   int num_envs = 1;               // N parallel training envs
   int64_t eval_every = 10000;     // env steps between evaluations (and at the end)
   int eval_episodes = 10;         // run in parallel, one env each
@@ -42,23 +51,21 @@ void from_json(const nlohmann::json& j, TrainConfig& c);  // unknown keys and ba
 
 struct RunConfig {
   TrainConfig train;
-  SacConfig sac;
-  nlohmann::json env;  // the env's resolved config (defaults + overrides)
+  nlohmann::json env;      // the env's resolved config (defaults + overrides)
+  nlohmann::json learner;  // the learner's resolved section (null: the algorithm does not learn)
+  nlohmann::json host;     // where the run was computed: recorded, never read (null until a run writes it)
 };
-// Resolve a config file's content ({"env"?, "sac"?, "train"?}, each section
-// overriding defaults; anything else rejected). env is resolved against
-// train.env's defaults, so set train.env before (or inside the file).
+// Resolve a config file's content ({"env"?, "<learner section>"?, "train"?,
+// "host"?}; each section overrides defaults, anything else is rejected).
+// env is resolved against train.env's defaults; the learner section
+// (e.g. "sac") against the learner's defaults for the env and safety layer
+// of train.algo; a learner section of another learner, or one given to an
+// algorithm without a learner, is an error. "host" is accepted and kept
+// as it is (so DIR/config.json re-runs a run anywhere).
 RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* train_base = nullptr);
 nlohmann::json run_config_json(const RunConfig& c);
-
-struct EvalResult {
-  double return_mean = 0, return_std = 0;
-  int episodes = 0;
-  int early_terminations = 0;     // episodes that ended terminated (not truncated)
-  double avg_episode_steps = 0;
-  double violations = 0;          // steps per episode with a constraint row above its tolerance
-  std::vector<double> info;       // per info column: reduced per episode, averaged over episodes
-};
+// The safety layer of the run's algorithm.
+SafetyLayer run_safety_layer(const RunConfig& c);
 
 struct TrainOptions {
   std::string out_dir;            // required
@@ -74,39 +81,65 @@ struct TrainSummary {
   EvalResult final_eval;
   int64_t env_steps = 0, updates = 0;
   double wall_s = 0;
-  uint64_t agent_hash = 0;        // Sac::state_hash() at the end
+  uint64_t agent_hash = 0;        // the learner's state_hash() at the end (0 without a learner)
   nlohmann::json summary;         // what summary.json holds
 };
 
 // Runs (or resumes) training into opts.out_dir. Throws std::invalid_argument
 // on bad configs or an unusable directory, before doing any work.
+// Resuming needs the directory with its config.json; a checkpoint.bin that
+// is gone while progress.csv holds evaluations is refused (the run cannot
+// continue bitwise); with no evaluation yet the run restarts from step 0
+// and says so on the log. A budget below the steps already done is refused.
 TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts);
 
-// The policy of a finished (or checkpointed) run, loaded from its directory
-// (config.json + checkpoint.bin): the actor with the run's observation
-// normalisation, acting with its mean action. For evaluation protocols
-// (e.g. `atacom shelf-real --run DIR`) and deployment.
-class TrainedPolicy {
+// A run directory's learned policy: policy_final.bin (the end of training)
+// or policy_best.bin (the best evaluation), for any learner, acting exactly
+// as in the run's evaluations. For `atacom rollout/shelf-real --policy
+// trained --run DIR` and deployment.
+enum class RunPolicy : uint8_t { Final = 0, Best = 1 };
+const char* run_policy_file(RunPolicy which);  // "policy_final.bin", "policy_best.bin"
+
+class TrainedPolicy final : public Policy {
  public:
-  // Throws std::runtime_error naming the problem (missing files, corrupt or
-  // mismatching checkpoint).
-  static std::unique_ptr<TrainedPolicy> load(const std::string& run_dir);
-  ~TrainedPolicy();
-  // obs: (N x obs_dim) raw env observations; actions: (N x act_dim) in [-1, 1].
-  void act(const float* obs, int N, double* actions);
+  // Throws std::runtime_error naming the problem (no config.json, a run of an
+  // algorithm that does not learn, missing or corrupt policy file, a file of
+  // another run or env).
+  static std::unique_ptr<TrainedPolicy> load(const std::string& run_dir, RunPolicy which = RunPolicy::Final);
+
+  int obs_dim() const override { return inner_->obs_dim(); }
+  int act_dim() const override { return inner_->act_dim(); }
+  std::string kind() const override { return inner_->kind(); }
+  void act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions) override {
+    inner_->act(obs, N, deterministic, rngs, actions);
+  }
+  // The deterministic (mean) action.
+  void act(const float* obs, int N, double* actions) { inner_->act(obs, N, true, nullptr, actions); }
+  void save(std::ostream& out) const override { inner_->save(out); }
+  void load(std::istream& in) override { inner_->load(in); }
+
   const RunConfig& config() const { return cfg_; }
-  int obs_dim() const;
-  int act_dim() const;
+  SafetyLayer safety() const { return run_safety_layer(cfg_); }  // the layer the run trained through
+  const nlohmann::json& manifest() const { return manifest_; }   // the policy file's manifest
 
  private:
   TrainedPolicy() = default;
-  struct Impl;
   RunConfig cfg_;
-  std::unique_ptr<Impl> impl_;
+  nlohmann::json manifest_;
+  std::unique_ptr<Policy> inner_;
 };
+inline std::unique_ptr<TrainedPolicy> load_run_policy(const std::string& run_dir, RunPolicy which = RunPolicy::Final) {
+  return TrainedPolicy::load(run_dir, which);
+}
 
-// Column names of progress.csv for an env with these info columns.
-std::vector<std::string> progress_columns(const std::vector<std::string>& info_names);
+// Column names of progress.csv for an env (spec of the env the run acts in)
+// and a learner's columns: env_steps, updates, wall_s, eval_return_mean,
+// eval_return_std, train_episode_return, <learner columns>, <info columns>,
+// early_terminations, avg_episode_steps, violations,
+// eval_discounted_return_mean, eval_discounted_return_std,
+// eval_max_constraint, train_episodes, train_terminations, train_violations,
+// train_<info> for every summed info column.
+std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector<std::string>& learner_columns);
 
 // Hand-written SVG line chart of eval return (mean +- std band) vs env steps.
 std::string learning_curve_svg(const std::string& title, const std::vector<double>& steps,

@@ -1,42 +1,62 @@
-// atacom rollout: check a safety setup before training.
-#include <fstream>
+// atacom rollout: check a safety setup (or a trained policy) before training.
 #include <iostream>
 
-#include "train/rollout.hpp"
 #include "cli/command.hpp"
+#include "cli/json_file.hpp"
+#include "train/rollout.hpp"
 
 namespace {
 
 struct RolloutArgs {
   atacom::RolloutConfig cfg;
-  std::string atacom = "on";
-  std::string config_file;
+  std::string atacom, safety, config_file, which = "final";
+  CLI::Option *o_atacom = nullptr, *o_safety = nullptr;
 };
 
+int run(RolloutArgs& a) {
+  // --atacom on|off is the older spelling of --safety atacom|none.
+  if (a.o_atacom->count() && a.o_safety->count() &&
+      (a.atacom == "on") != (a.safety == "atacom"))
+    throw std::invalid_argument("--atacom " + a.atacom + " contradicts --safety " + a.safety);
+  if (a.o_safety->count()) a.cfg.safety = atacom::parse_safety_layer(a.safety);
+  else if (a.o_atacom->count()) a.cfg.safety = a.atacom == "on" ? atacom::SafetyLayer::Atacom : atacom::SafetyLayer::None;
+  if (!a.config_file.empty()) {
+    if (a.cfg.policy == "trained")
+      throw std::invalid_argument("--config does not apply to --policy trained: the run's env config is used");
+    a.cfg.env_config = atacom::cli::read_json_file(a.config_file);
+  }
+  if (a.which != "final" && a.cfg.policy != "trained")
+    throw std::invalid_argument("--which applies to --policy trained only");
+  a.cfg.which = a.which == "best" ? atacom::RunPolicy::Best : atacom::RunPolicy::Final;
+  std::cout << atacom::run_rollout(a.cfg).dump() << std::endl;
+  return 0;
+}
+
 atacom::cli::RegisterCommand reg(
-    {"rollout", "run an env with a random or zero policy, with or without ATACOM, and count collisions and violations",
+    {"rollout",
+     "run an env with a random, zero, linear-attractor or trained policy, through a safety layer or none, and count "
+     "collisions and violations",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<RolloutArgs>();
-       app.add_option("--env", a->cfg.env, "environment name")->required();
-       app.add_option("--policy", a->cfg.policy, "random | zero")->check(CLI::IsMember({"random", "zero"}));
-       app.add_option("--atacom", a->atacom, "on | off")->check(CLI::IsMember({"on", "off"}));
+       app.add_option("--env", a->cfg.env, "environment name (required unless --policy trained)");
+       app.add_option("--policy", a->cfg.policy, "random | zero | la (the env's linear attractor) | trained (with --run)")
+           ->check(CLI::IsMember({"random", "zero", "la", "trained"}));
+       app.add_option("--run", a->cfg.run_dir, "training run directory (--policy trained)");
+       app.add_option("--which", a->which, "final | best: the run's policy file (--policy trained)")
+           ->check(CLI::IsMember({"final", "best"}));
+       a->o_safety = app.add_option("--safety", a->safety,
+                                    "none | atacom | safelayer (default atacom; with --policy trained the run's)")
+                         ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
+       a->o_atacom = app.add_option("--atacom", a->atacom, "on | off: the same as --safety atacom | none")
+                         ->check(CLI::IsMember({"on", "off"}));
        app.add_option("--steps", a->cfg.steps, "env steps in total")->check(CLI::PositiveNumber);
        app.add_option("--envs", a->cfg.envs, "parallel envs")->check(CLI::PositiveNumber);
        app.add_option("--seed", a->cfg.seed, "random seed");
        app.add_option("--config", a->config_file, "JSON file with env config overrides");
        return [a] {
-         a->cfg.atacom = a->atacom == "on";
-         if (!a->config_file.empty()) {
-           std::ifstream in(a->config_file);
-           if (!in) throw std::runtime_error("cannot read config file '" + a->config_file + "'");
-           try {
-             a->cfg.env_config = nlohmann::json::parse(in);
-           } catch (const nlohmann::json::exception& e) {
-             throw std::runtime_error("config file '" + a->config_file + "' is not valid JSON: " + e.what());
-           }
-         }
-         std::cout << atacom::run_rollout(a->cfg).dump() << std::endl;
-         return 0;
+         if (a->cfg.env.empty() && a->cfg.policy != "trained")
+           throw std::invalid_argument("--env is required (unless --policy trained)");
+         return run(*a);
        };
      }});
 

@@ -1,63 +1,77 @@
 // atacom shelf-real: the ShelfEnvReal protocol (two sequential targets in the
-// shelf, success = within 10 cm for 2 s, at most 16.67 s per target) with a
-// built-in policy; prints one JSON object with the paper's table columns.
+// shelf, success = within 10 cm for 2 s, at most 16.67 s per target) with any
+// policy; prints one JSON object with the paper's table columns.
 #include <iostream>
 #include <memory>
 
 #include "atacom/env_registry.hpp"
-#include "atacom/rng.hpp"
-#include "envs/arm/shelf_real.hpp"
 #include "atacom/trainer.hpp"
 #include "cli/command.hpp"
+#include "cli/json_file.hpp"
+#include "envs/arm/arm_attractor.hpp"
+#include "envs/arm/shelf_real.hpp"
 
 namespace atacom::cli {
 namespace {
 
 struct Options {
   std::string policy = "la";
-  std::string atacom = "on";
+  std::string atacom, safety, which = "final";
   int trials = 25;
   uint64_t seed = 0;
-  std::string config = "{}";
+  std::string config_file;
   std::string run_dir;  // --policy trained: the training run to load
-  bool atacom_set = false;
+  CLI::Option *o_atacom = nullptr, *o_safety = nullptr;
 };
 
 int run(const Options& o) {
+  const bool trained = o.policy == "trained";
+  if (!trained && !o.run_dir.empty())
+    throw std::invalid_argument("--run applies to --policy trained only (the policy is '" + o.policy + "')");
+  if (!trained && o.which != "final") throw std::invalid_argument("--which applies to --policy trained only");
+  if (trained && !o.config_file.empty())
+    throw std::invalid_argument("--config does not apply to --policy trained: the run's env config is used");
+  if (o.o_atacom->count() && o.o_safety->count() && (o.atacom == "on") != (o.safety == "atacom"))
+    throw std::invalid_argument("--atacom " + o.atacom + " contradicts --safety " + o.safety);
+  std::optional<SafetyLayer> layer;
+  if (o.o_safety->count()) layer = parse_safety_layer(o.safety);
+  else if (o.o_atacom->count()) layer = o.atacom == "on" ? SafetyLayer::Atacom : SafetyLayer::None;
+  if (layer && *layer == SafetyLayer::SafeLayer)
+    throw std::invalid_argument("shelf-real runs its policy through ATACOM or no layer (--safety atacom|none)");
+
   ArmEnvConfig ec = default_arm_env_config(ArmTask::Shelf);
-  from_json(merge_config_strict(nlohmann::json(ec), nlohmann::json::parse(o.config)), ec);
+  if (!o.config_file.empty()) from_json(merge_config_strict(nlohmann::json(ec), read_json_file(o.config_file)), ec);
   ShelfRealConfig c = default_shelf_real_config();
   c.trials = o.trials;
   c.seed = o.seed;
-  c.atacom = o.atacom == "on";
-  BatchPolicy policy;
-  if (o.policy == "trained") {
+  c.atacom = layer.value_or(SafetyLayer::Atacom) == SafetyLayer::Atacom;
+  std::unique_ptr<Policy> policy;
+  nlohmann::json run_info;
+  if (trained) {
     if (o.run_dir.empty()) throw std::invalid_argument("--policy trained needs --run DIR (a training run directory)");
-    std::shared_ptr<TrainedPolicy> tp = TrainedPolicy::load(o.run_dir);
+    auto tp = TrainedPolicy::load(o.run_dir, o.which == "best" ? RunPolicy::Best : RunPolicy::Final);
     const TrainConfig& t = tp->config().train;
-    if (t.env != "shelf")
-      throw std::invalid_argument("run '" + o.run_dir + "' trained env '" + t.env + "', not shelf");
-    // The protocol uses the run's env settings, and ATACOM exactly as in training.
+    if (t.env != "shelf") throw std::invalid_argument("run '" + o.run_dir + "' trained env '" + t.env + "', not shelf");
+    if (!layer && tp->safety() == SafetyLayer::SafeLayer)
+      throw std::invalid_argument("run '" + o.run_dir + "' trained through SafeLayer, which shelf-real does not run");
+    // The protocol uses the run's env settings and, unless told otherwise, its layer.
     from_json(merge_config_strict(nlohmann::json(ec), tp->config().env), ec);
-    c.atacom = t.algo == "atacom-sac";
-    policy = [tp](const float* obs, int N, double* a) { tp->act(obs, N, a); };
+    c.atacom = layer.value_or(tp->safety()) == SafetyLayer::Atacom;
+    run_info = {{"run", o.run_dir}, {"run_algo", t.algo}, {"run_safety", safety_layer_name(tp->safety())},
+                {"run_policy", run_policy_file(o.which == "best" ? RunPolicy::Best : RunPolicy::Final)}};
+    policy = std::move(tp);
   } else if (o.policy == "la") {
-    ArmEnv probe(ec, 1);
-    policy = make_linear_attractor_policy(probe);
+    policy = std::make_unique<ArmAttractorPolicy>(ec);
   } else if (o.policy == "zero") {
-    policy = [](const float*, int N, double* a) { std::fill(a, a + static_cast<size_t>(N) * kArmJoints, 0.0); };
+    policy = make_zero_policy(kArmObsDim, kArmJoints);
   } else {
-    auto rng = std::make_shared<Rng>(o.seed, 7);
-    policy = [rng](const float*, int N, double* a) {
-      for (size_t i = 0; i < static_cast<size_t>(N) * kArmJoints; ++i) a[i] = rng->uniform(-1.0, 1.0);
-    };
+    policy = make_random_policy(kArmObsDim, kArmJoints);
   }
-  if (o.policy == "trained" && o.atacom_set)
-    std::cerr << "shelf-real: --atacom is taken from the run (" << (c.atacom ? "on" : "off") << ")\n";
-  const ShelfRealResult r = evaluate_shelf_real(ec, c, policy);
+  const ShelfRealResult r = evaluate_shelf_real(ec, c, *policy);
   nlohmann::json out = r;
   out["policy"] = o.policy;
-  if (!o.run_dir.empty()) out["run"] = o.run_dir;
+  out["safety"] = c.atacom ? "atacom" : "none";
+  for (auto it = run_info.begin(); it != run_info.end(); ++it) out[it.key()] = it.value();
   out["protocol"] = c;
   std::cout << out.dump() << "\n";
   return 0;
@@ -71,16 +85,18 @@ const RegisterCommand reg{{"shelf-real",
                                             "la (linear attractor), zero, random, or trained (with --run)")
                                  ->check(CLI::IsMember({"la", "zero", "random", "trained"}));
                              app.add_option("--run", o->run_dir,
-                                            "training run directory of a shelf policy (atacom train --env shelf)");
-                             auto* at = app.add_option("--atacom", o->atacom, "ATACOM between policy and env")
-                                 ->check(CLI::IsMember({"on", "off"}));
+                                            "training run directory of a shelf policy (--policy trained)");
+                             app.add_option("--which", o->which, "final | best: the run's policy file (--policy trained)")
+                                 ->check(CLI::IsMember({"final", "best"}));
+                             o->o_safety = app.add_option("--safety", o->safety,
+                                                          "none | atacom (default atacom; with --policy trained the run's)")
+                                               ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
+                             o->o_atacom = app.add_option("--atacom", o->atacom, "on | off: the same as --safety atacom | none")
+                                               ->check(CLI::IsMember({"on", "off"}));
                              app.add_option("--trials", o->trials, "trials (one env each)")->check(CLI::PositiveNumber);
                              app.add_option("--seed", o->seed, "seed of starts and targets");
-                             app.add_option("--config", o->config, "JSON overrides of the shelf env config");
-                             return [o, at] {
-                               o->atacom_set = at->count() > 0;
-                               return run(*o);
-                             };
+                             app.add_option("--config", o->config_file, "JSON file with shelf env config overrides");
+                             return [o] { return run(*o); };
                            }}};
 
 }  // namespace

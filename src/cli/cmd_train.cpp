@@ -1,4 +1,4 @@
-// atacom train: SAC / ATACOM-SAC on any registered env (logic in train/trainer.cpp).
+// atacom train: any algorithm of the table on any registered env (logic in train/).
 #include <unistd.h>
 
 #include <filesystem>
@@ -9,32 +9,30 @@
 
 #include "atacom/trainer.hpp"
 #include "cli/command.hpp"
+#include "cli/json_file.hpp"
+#include "train/algorithms.hpp"
 
 namespace atacom::cli {
 namespace {
 
-nlohmann::json read_json_file(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw std::invalid_argument("cannot read config file '" + path + "'");
-  try {
-    return nlohmann::json::parse(f);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument("config file '" + path + "' is not valid JSON: " + e.what());
-  }
-}
-
 struct TrainArgs {
   std::string env, algo, config, out;
   int64_t seed = 0, steps = 0;
-  int envs = 0;
+  int envs = 0, eval_episodes = 0;
   bool resume = false;
-  CLI::Option *o_env = nullptr, *o_algo = nullptr, *o_seed = nullptr, *o_steps = nullptr, *o_envs = nullptr;
+  CLI::Option *o_env = nullptr, *o_algo = nullptr, *o_seed = nullptr, *o_steps = nullptr, *o_envs = nullptr,
+              *o_eval = nullptr;
 };
 
 int run(const TrainArgs& a) {
   RunConfig rc;
-  const std::filesystem::path saved = std::filesystem::path(a.out) / "config.json";
-  if (a.resume && std::filesystem::exists(saved)) {
+  const std::filesystem::path dir(a.out), saved = dir / "config.json";
+  if (a.resume) {
+    if (!std::filesystem::exists(dir))
+      throw std::invalid_argument("--resume: run directory '" + a.out + "' does not exist");
+    if (!std::filesystem::exists(saved))
+      throw std::invalid_argument("--resume: '" + a.out +
+                                  "' holds no config.json, so there is no run to resume (start one without --resume)");
     if (!a.config.empty())
       throw std::invalid_argument("--config cannot be combined with --resume: the run's own config.json is used");
     rc = resolve_run_config(read_json_file(saved.string()));
@@ -46,7 +44,8 @@ int run(const TrainArgs& a) {
     same(a.o_algo, a.algo == rc.train.algo, "--algo");
     same(a.o_seed, a.seed == rc.train.seed, "--seed");
     same(a.o_envs, a.envs == rc.train.num_envs, "--envs");
-    if (a.o_steps->count() > 0) rc.train.steps = a.steps;  // a resumed run may extend its budget
+    same(a.o_eval, a.eval_episodes == rc.train.eval_episodes, "--eval-episodes");
+    if (a.o_steps->count() > 0) rc.train.steps = a.steps;  // a resumed run may extend its budget (never shrink it)
   } else {
     nlohmann::json file = a.config.empty() ? nlohmann::json::object() : read_json_file(a.config);
     if (!file.is_object()) throw std::invalid_argument("config file must hold a JSON object");
@@ -59,6 +58,7 @@ int run(const TrainArgs& a) {
     if (a.o_seed->count()) t["seed"] = a.seed;
     if (a.o_steps->count()) t["steps"] = a.steps;
     if (a.o_envs->count()) t["num_envs"] = a.envs;
+    if (a.o_eval->count()) t["eval_episodes"] = a.eval_episodes;
     rc = resolve_run_config(file);
   }
   TrainOptions opts;
@@ -71,17 +71,29 @@ int run(const TrainArgs& a) {
   return 0;
 }
 
+std::string algo_help() {
+  std::string h = "algorithm: action source x safety layer (";
+  bool first = true;
+  for (const std::string& n : algorithm_names()) {
+    h += (first ? "" : ", ") + n;
+    first = false;
+  }
+  return h + "); la, random, zero and their variants evaluate only";
+}
+
 const RegisterCommand reg{Command{
-    "train", "train SAC or ATACOM-SAC on a registered env, with evaluation, checkpoints and resume",
+    "train", "train (or, for hand-coded policies, evaluate) an algorithm on a registered env, with checkpoints and resume",
     [](CLI::App& app) -> std::function<int()> {
       auto a = std::make_shared<TrainArgs>();
       a->o_env = app.add_option("--env", a->env, "env name (see the registry)");
-      a->o_algo = app.add_option("--algo", a->algo, "sac (plain env) or atacom-sac (env wrapped in ATACOM)");
+      a->o_algo = app.add_option("--algo", a->algo, algo_help());
       a->o_seed = app.add_option("--seed", a->seed, "random seed")->check(CLI::NonNegativeNumber);
       a->o_steps = app.add_option("--steps", a->steps, "env transitions to train for (all envs together)")
                        ->check(CLI::PositiveNumber);
       a->o_envs = app.add_option("--envs", a->envs, "parallel training envs N")->check(CLI::PositiveNumber);
-      app.add_option("--config", a->config, "JSON file with env/sac/train sections overriding the defaults");
+      a->o_eval = app.add_option("--eval-episodes", a->eval_episodes, "episodes per evaluation (train.eval_episodes)")
+                      ->check(CLI::PositiveNumber);
+      app.add_option("--config", a->config, "JSON file with env/<learner>/train sections overriding the defaults");
       app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();
       app.add_flag("--resume", a->resume, "continue the run in --out from its last checkpoint");
       return [a]() { return run(*a); };

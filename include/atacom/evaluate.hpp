@@ -1,0 +1,52 @@
+// The evaluator: the paper's metrics for any policy on any env (with or
+// without a safety layer), learned and hand-coded policies alike.
+//
+// Episodes run in parallel, one per env of the batch; when `episodes`
+// exceeds the batch size they run in rounds. Round r seeds the env with
+// eval_env_seed(seed, r) and episode j draws its action noise from stream
+// (seed, kEvalStream + j): every evaluation of a run (seed) starts from the
+// same states, whatever the algorithm, so `la` and `sac` with the same seed
+// face the same start states and goals. The trainer evaluates through this
+// function; its numbers for SAC are the ones the trainer wrote before the
+// evaluator was split out (tests/test_evaluate.cpp holds it to them).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "atacom/env.hpp"
+#include "atacom/policy.hpp"
+
+namespace atacom {
+
+struct EvalResult {
+  int episodes = 0;
+  double return_mean = 0, return_std = 0;                       // undiscounted, over episodes (population std)
+  double discounted_return_mean = 0, discounted_return_std = 0;  // sum_t gamma^t r_t, gamma = EnvSpec::gamma
+  int early_terminations = 0;     // episodes that ended terminated (collision, limit), not by the horizon
+  double avg_episode_steps = 0;
+  double violations = 0;          // steps per episode with a constraint row above its tolerance
+  double max_constraint = 0;      // largest constraint value of any row at any step (NaN: no rows)
+  double final_distance = 0;      // the env's "final_distance" info column (NaN: the env has none)
+  double collisions = 0;          // the env's "collision" info column: ground-truth contacts per episode (NaN: none)
+  std::vector<std::string> info_names;  // the env's info columns
+  std::vector<double> info;       // per info column: reduced per episode (InfoReduce), averaged over episodes
+};
+
+// Runs `episodes` episodes (each until done, or at most spec().horizon steps;
+// 100000 for envs without one). Throws std::invalid_argument on mismatched
+// dimensions or episodes < 1. Allocates its scratch per call (not per step).
+EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, bool deterministic);
+
+// The env seed of evaluation round r (round 0: seed ^ a fixed salt).
+uint64_t eval_env_seed(uint64_t seed, int round);
+
+// {"eval_return_mean", "eval_return_std", "eval_discounted_return_mean", ...,
+//  "early_terminations", "avg_episode_steps", "violations", "eval_max_constraint",
+//  one key per info column, collision columns also as "<name>s"}; non-finite
+// numbers as null. The keys summary.json uses for the final and the best evaluation.
+nlohmann::json eval_json(const EvalResult& r);
+
+}  // namespace atacom

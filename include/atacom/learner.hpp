@@ -1,0 +1,81 @@
+// The learner contract: what the trainer loop knows of a learning algorithm.
+//
+// A learner (SAC, the adversary) owns its config section of config.json,
+// its progress.csv columns, its checkpoint payload, its state hash and its
+// summary.json keys. It exposes the Policy that acts during training (with
+// sampled actions) and evaluation, and receives every batch transition
+// after the env stepped, to store and learn from. The trainer knows nothing
+// else of it. Learners register in train/learner_registry.cpp (one line each);
+// the algorithm table (train/algorithms.cpp) names which learner an --algo uses.
+#pragma once
+#include <cstdint>
+#include <iosfwd>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "atacom/env.hpp"
+#include "atacom/policy.hpp"
+#include "atacom/safety_layer.hpp"
+
+namespace atacom {
+
+struct LearnerContext {
+  const EnvSpec* spec = nullptr;        // the env the learner acts in (safety layer included)
+  int num_envs = 1;                     // N of the training batch
+  uint64_t seed = 0;                    // the run's seed
+  const EnvBuffers* initial = nullptr;  // the training batch right after env.seed(seed)
+};
+
+class Learner {
+ public:
+  virtual ~Learner() = default;
+  virtual std::string name() const = 0;
+  // Acts in training (deterministic = false, per-env streams) and evaluation.
+  virtual Policy& policy() = 0;
+  // One batch step: the policy chose `actions` (N x act_dim) for `obs`
+  // (N x obs_dim, raw), the env stepped, `after` holds its buffers. Store the
+  // transitions and run the updates they pay for. May throw on divergence.
+  virtual void observe(const float* obs, const double* actions, const EnvBuffers& after) = 0;
+  virtual int64_t updates() const = 0;
+
+  // progress.csv: the learner's columns and their values for the next row
+  // (means since the previous row; the call starts a new window).
+  virtual std::vector<std::string> progress_columns() const = 0;
+  virtual std::vector<double> progress_values() = 0;
+  // Keys added to summary.json (e.g. "alpha") and to checkpoint.json.
+  virtual nlohmann::json summary() const = 0;
+  virtual nlohmann::json manifest() const = 0;
+
+  // Checkpoint payload: everything learned or drawn. load() validates its
+  // counters against env_steps (the trainer's) and the config, and throws
+  // std::runtime_error naming the first impossible value.
+  virtual void save(std::ostream& out) const = 0;
+  virtual void load(std::istream& in, int64_t env_steps) = 0;
+  // Equal hashes mean bitwise equal learner states.
+  virtual uint64_t state_hash() const = 0;
+};
+
+struct LearnerEntry {
+  std::string name;     // "sac", "adversary"
+  std::string section;  // the config.json section it owns ("sac", "adversary")
+  std::string help;
+  // Defaults for an env under a safety layer (JSON; the env's own settings
+  // laid over the learner's global defaults).
+  nlohmann::json (*default_config)(const std::string& env, SafetyLayer safety);
+  // Validates a section (defaults with a file's keys laid over) and returns
+  // it complete; throws std::invalid_argument naming a bad key.
+  nlohmann::json (*resolve)(const nlohmann::json& section);
+  std::unique_ptr<Learner> (*make)(const LearnerContext& ctx, const nlohmann::json& resolved);
+  // The learner's acting policy for an env, with unset parameters (policy
+  // files load into it).
+  std::unique_ptr<Policy> (*make_policy)(const EnvSpec& spec, const nlohmann::json& resolved);
+};
+
+const std::vector<LearnerEntry>& learner_entries();
+// Throws std::invalid_argument for an unknown name (listing the known ones).
+const LearnerEntry& learner_entry(const std::string& name);
+
+}  // namespace atacom

@@ -1,0 +1,48 @@
+// The algorithm table: every `--algo` name is an action source composed
+// with a safety layer. This is the one place algorithm names are compared;
+// the env registry and the trainer loop know none of them.
+//
+//   source \ layer      none        atacom           safelayer
+//   SAC learner         sac         atacom-sac       safelayer-sac
+//   linear attractor    la          la-atacom        la-safelayer
+//   random actions      random      random-atacom    random-safelayer
+//   zero actions        zero        zero-atacom      zero-safelayer
+//   SAC adversary       attack      attack-atacom    attack-safelayer
+//
+// Learner sources train (and are evaluated as they go); the others are
+// evaluated only. The adversary learns to reach the largest constraint value
+// (train/adversary.hpp), the attack of `atacom attack`.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "atacom/safety_layer.hpp"
+
+namespace atacom {
+
+enum class ActionSource : uint8_t {
+  Learner = 0,    // a registered learner (Algorithm::learner) acts and learns
+  Attractor = 1,  // the env family's linear attractor (EnvEntry::make_attractor)
+  Random = 2,     // U[-1, 1] per action component
+  Zero = 3,       // all zeros
+};
+
+struct Algorithm {
+  std::string name;         // "atacom-sac"
+  ActionSource source;
+  SafetyLayer safety;
+  std::string learner;      // learner registry name when source == Learner ("sac", "adversary"), else ""
+  std::string help;
+  bool learns() const { return source == ActionSource::Learner; }
+};
+
+const std::vector<Algorithm>& algorithms();
+std::vector<std::string> algorithm_names();
+// Throws std::invalid_argument for an unknown name, listing the known ones.
+const Algorithm& find_algorithm(const std::string& name);
+// The algorithm of a source (and learner) under a layer, e.g. the adversary
+// through ATACOM = "attack-atacom". Throws if there is none.
+const Algorithm& algorithm_for(ActionSource source, const std::string& learner, SafetyLayer safety);
+
+}  // namespace atacom

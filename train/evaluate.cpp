@@ -1,0 +1,154 @@
+#include "atacom/evaluate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace atacom {
+
+namespace {
+constexpr uint64_t kEvalStream = uint64_t{2} << 32;  // episode j's action noise: stream (seed, kEvalStream + j)
+constexpr uint64_t kEvalSeedSalt = 0x5EEDE7A15EEDE7A1ull;
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool ends_with_collision(const std::string& name) {
+  return name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0;
+}
+nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+}  // namespace
+
+uint64_t eval_env_seed(uint64_t seed, int round) {
+  return (seed ^ kEvalSeedSalt) + uint64_t(round) * 0x9E3779B97F4A7C15ull;
+}
+
+EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, bool deterministic) {
+  const EnvSpec& spec = env.spec();
+  const int N = env.num_envs(), D = spec.obs_dim, A = spec.act_dim, k = spec.num_constraints;
+  const int ni = int(spec.info_names.size());
+  if (episodes < 1) throw std::invalid_argument("evaluate: episodes must be >= 1");
+  if (policy.obs_dim() != D || policy.act_dim() != A)
+    throw std::invalid_argument("evaluate: the policy's obs/act dims " + std::to_string(policy.obs_dim()) + "/" +
+                                std::to_string(policy.act_dim()) + " differ from env '" + spec.name + "' (" +
+                                std::to_string(D) + "/" + std::to_string(A) + ")");
+  if (spec.info_reduce.size() != size_t(ni))
+    throw std::invalid_argument("env '" + spec.name + "' spec: info_reduce and info_names differ in length");
+  // Per episode (in episode order), filled round by round.
+  std::vector<double> ret(size_t(episodes), 0.0), disc(size_t(episodes), 0.0), info(size_t(episodes) * ni, 0.0);
+  std::vector<int> len(size_t(episodes), 0);
+  std::vector<uint8_t> term(size_t(episodes), 0);
+  std::vector<int32_t> viol(size_t(episodes), 0);
+  // Per env of the batch.
+  std::vector<Rng> rngs(static_cast<size_t>(N));
+  std::vector<double> actions(size_t(N) * A, 0.0), gt(size_t(N), 1.0);
+  std::vector<uint8_t> done(size_t(N), 0);
+  double max_c = -std::numeric_limits<double>::infinity();
+  const int cap = spec.horizon > 0 ? spec.horizon : 100000;  // envs without a horizon stop here
+  const EnvBuffers& b = env.buffers();
+  for (int round = 0, first = 0; first < episodes; ++round, first += N) {
+    const int active = std::min(N, episodes - first);
+    env.seed(eval_env_seed(seed, round));  // the same start states at every evaluation
+    for (int i = 0; i < N; ++i) rngs[size_t(i)].reseed(seed, kEvalStream + uint64_t(first + i));
+    for (int i = 0; i < N; ++i) {
+      done[size_t(i)] = i >= active;  // rows beyond the requested episodes run but are not counted
+      gt[size_t(i)] = 1.0;
+    }
+    for (int i = 0; i < active; ++i)
+      for (int c = 0; c < ni; ++c)
+        info[size_t(first + i) * ni + c] =
+            spec.info_reduce[size_t(c)] == InfoReduce::Max ? -std::numeric_limits<double>::infinity() : 0.0;
+    int remaining = active;
+    for (int step = 0; step < cap && remaining > 0; ++step) {
+      policy.act(b.obs.data(), N, deterministic, rngs.data(), actions.data());
+      env.step(actions.data());
+      for (int i = 0; i < active; ++i) {
+        if (done[size_t(i)]) continue;
+        const size_t e = size_t(first + i);
+        ret[e] += b.reward[size_t(i)];
+        disc[e] += gt[size_t(i)] * b.reward[size_t(i)];
+        gt[size_t(i)] *= spec.gamma;
+        ++len[e];
+        bool v = false;
+        for (int r = 0; r < k; ++r) {
+          const double c = b.constraints[size_t(i) * k + r];
+          v = v || c > spec.constraint_tolerance[size_t(r)];
+          if (std::isfinite(c)) max_c = std::max(max_c, c);
+        }
+        viol[e] += v;
+        for (int c = 0; c < ni; ++c) {
+          double& acc = info[e * ni + c];
+          const double x = b.info[size_t(i) * ni + c];
+          switch (spec.info_reduce[size_t(c)]) {
+            case InfoReduce::Last: acc = x; break;
+            case InfoReduce::Sum: case InfoReduce::Mean: acc += x; break;
+            case InfoReduce::Max: acc = std::max(acc, x); break;
+          }
+        }
+        if (b.done(i)) {
+          done[size_t(i)] = 1;
+          term[e] = b.terminated[size_t(i)];
+          --remaining;
+        }
+      }
+    }
+  }
+  EvalResult r;
+  const int M = episodes;
+  r.episodes = M;
+  r.info_names = spec.info_names;
+  r.info.assign(size_t(ni), 0.0);
+  double s = 0, sd = 0, s2 = 0, sd2 = 0, steps = 0;
+  for (int i = 0; i < M; ++i) {
+    s += ret[size_t(i)];
+    sd += disc[size_t(i)];
+    steps += len[size_t(i)];
+    r.early_terminations += term[size_t(i)];
+    r.violations += double(viol[size_t(i)]) / M;
+    for (int c = 0; c < ni; ++c) {
+      double v = info[size_t(i) * ni + c];
+      if (spec.info_reduce[size_t(c)] == InfoReduce::Mean) v /= std::max(1, len[size_t(i)]);
+      r.info[size_t(c)] += v / M;
+    }
+  }
+  r.return_mean = s / M;
+  r.discounted_return_mean = sd / M;
+  for (int i = 0; i < M; ++i) {
+    s2 += (ret[size_t(i)] - r.return_mean) * (ret[size_t(i)] - r.return_mean);
+    sd2 += (disc[size_t(i)] - r.discounted_return_mean) * (disc[size_t(i)] - r.discounted_return_mean);
+  }
+  r.return_std = std::sqrt(s2 / M);
+  r.discounted_return_std = std::sqrt(sd2 / M);
+  r.avg_episode_steps = steps / M;
+  r.max_constraint = k > 0 && std::isfinite(max_c) ? max_c : kNaN;
+  r.final_distance = r.collisions = kNaN;
+  for (int c = 0; c < ni; ++c) {
+    if (spec.info_names[size_t(c)] == "final_distance") r.final_distance = r.info[size_t(c)];
+    if (spec.info_names[size_t(c)] == "collision") r.collisions = r.info[size_t(c)];
+  }
+  return r;
+}
+
+nlohmann::json eval_json(const EvalResult& r) {
+  nlohmann::json s = {{"eval_return_mean", jnum(r.return_mean)},
+                      {"eval_return_std", jnum(r.return_std)},
+                      {"eval_discounted_return_mean", jnum(r.discounted_return_mean)},
+                      {"eval_discounted_return_std", jnum(r.discounted_return_std)},
+                      {"eval_episodes", r.episodes},
+                      {"early_terminations", r.early_terminations},
+                      {"avg_episode_steps", r.avg_episode_steps},
+                      {"violations", r.violations},
+                      {"eval_max_constraint", jnum(r.max_constraint)}};
+  for (size_t c = 0; c < r.info_names.size() && c < r.info.size(); ++c) {
+    const std::string& name = r.info_names[c];
+    s[name] = jnum(r.info[c]);
+    // Collision counts also under the plural names the rollout command and
+    // the issues use: collisions, wall_collisions, ...
+    if (ends_with_collision(name)) s[name + "s"] = jnum(r.info[c]);
+  }
+  return s;
+}
+
+}  // namespace atacom

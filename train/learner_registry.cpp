@@ -1,0 +1,30 @@
+// The learners, one line each: name, the config.json section it owns, its
+// default config, validation, factory and acting policy. The algorithm table
+// (train/algorithms.cpp) names which learner an --algo trains.
+#include <stdexcept>
+
+#include "atacom/learner.hpp"
+#include "train/adversary.hpp"
+#include "train/sac_learner.hpp"
+
+namespace atacom {
+
+const std::vector<LearnerEntry>& learner_entries() {
+  static const std::vector<LearnerEntry> entries = {
+      {"sac", "sac", "Soft Actor-Critic on the env's reward", sac_default_config, sac_resolve_config,
+       make_sac_learner, make_sac_policy},
+      {"adversary", "adversary", "SAC maximising the constraint values (train/adversary.hpp)",
+       adversary_default_config, adversary_resolve_config, make_adversary_learner, make_adversary_policy},
+  };
+  return entries;
+}
+
+const LearnerEntry& learner_entry(const std::string& name) {
+  for (const auto& e : learner_entries())
+    if (e.name == name) return e;
+  std::string known;
+  for (const auto& e : learner_entries()) known += (known.empty() ? "" : ", ") + e.name;
+  throw std::invalid_argument("unknown learner '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace atacom

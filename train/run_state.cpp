@@ -1,0 +1,127 @@
+#include "train/run_state.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "src/core/binary_io.hpp"
+
+namespace atacom {
+
+namespace {
+constexpr uint32_t kTagCounters = 0x434e5452;  // "CNTR"
+constexpr uint32_t kTagLearner = 0x4c524e52;   // "LRNR"
+constexpr uint32_t kTagStreams = 0x5354524d;   // "STRM"
+constexpr uint32_t kTagEnv = 0x454e5653;       // "ENVS"
+constexpr uint64_t kActStream = uint64_t{1} << 32;  // action noise: stream kActStream + env id
+
+// Evaluations a run must have written by env_steps: one per batch step that
+// crossed a multiple of eval_every (a run whose budget was extended also
+// holds the end-of-run rows of its earlier budgets, so this is a floor).
+int64_t least_rows(const TrainConfig& t, int N, int64_t env_steps) {
+  int64_t rows = 0, next = t.eval_every;
+  for (int64_t s = N; s <= env_steps; s += N)
+    if (s >= next) {
+      ++rows;
+      while (next <= s) next += t.eval_every;
+    }
+  return rows;
+}
+
+void validate(const RunCounters& c, const TrainConfig& t, const std::vector<double>& sums, const nlohmann::json& best) {
+  const int N = t.num_envs;
+  auto bad = [](const std::string& what) { throw std::runtime_error("checkpoint counter " + what); };
+  auto n = [](int64_t v) { return std::to_string(v); };
+  if (c.env_steps < 1 || c.env_steps % N != 0)
+    bad("env_steps = " + n(c.env_steps) + " is not a positive multiple of num_envs " + n(N));
+  const int64_t want_eval = (c.env_steps / t.eval_every + 1) * t.eval_every;
+  if (c.next_eval != want_eval)
+    bad("next_eval = " + n(c.next_eval) + ", expected " + n(want_eval) + " after " + n(c.env_steps) + " steps");
+  const int64_t want_ckpt = t.checkpoint_every > 0 ? (c.env_steps / t.checkpoint_every + 1) * t.checkpoint_every : 0;
+  if (c.next_ckpt != want_ckpt)
+    bad("next_ckpt = " + n(c.next_ckpt) + ", expected " + n(want_ckpt) + " after " + n(c.env_steps) + " steps");
+  if (c.train_episodes < 0 || c.train_episodes > c.env_steps)
+    bad("train_episodes = " + n(c.train_episodes) + " is outside [0, " + n(c.env_steps) + "]");
+  if (c.train_terminations < 0 || c.train_terminations > c.train_episodes)
+    bad("train_terminations = " + n(c.train_terminations) + " is outside [0, train_episodes]");
+  if (c.train_violations < 0 || c.train_violations > c.env_steps)
+    bad("train_violations = " + n(c.train_violations) + " is outside [0, " + n(c.env_steps) + "]");
+  if (std::isnan(c.train_max_constraint) || c.train_max_constraint == std::numeric_limits<double>::infinity())
+    bad("train_max_constraint is not a number");
+  if (!(std::isfinite(c.wall_s) && c.wall_s >= 0)) bad("wall_s is not a finite number >= 0");
+  if (c.recent_returns < 0 || c.recent_returns > c.train_episodes) bad("recent_returns is outside [0, train_episodes]");
+  if (!std::isfinite(c.recent_return_sum)) bad("recent_return_sum is not finite");
+  if (std::isinf(c.last_train_return)) bad("last_train_return is infinite");
+  const int64_t lo = least_rows(t, N, c.env_steps), hi = c.env_steps / N;
+  if (c.progress_rows < lo || c.progress_rows > hi)
+    bad("progress_rows = " + n(c.progress_rows) + " is outside [" + n(lo) + ", " + n(hi) + "] for " + n(c.env_steps) +
+        " steps");
+  for (double x : sums)
+    if (!std::isfinite(x)) bad("train info sums hold a non-finite value");
+  if (!best.is_null()) {
+    if (!best.is_object() || !best.contains("env_steps") || !best["env_steps"].is_number_integer() ||
+        best["env_steps"].get<int64_t>() < 1 || best["env_steps"].get<int64_t>() > c.env_steps ||
+        c.progress_rows < 1)
+      bad("best evaluation record is inconsistent");
+  }
+}
+}  // namespace
+
+void init_run_state(RunState& s, const TrainConfig& t, const EnvSpec& spec, const EnvBuffers& initial) {
+  s.counters = RunCounters{};
+  s.counters.next_eval = t.eval_every;
+  s.counters.next_ckpt = t.checkpoint_every > 0 ? t.checkpoint_every : 0;
+  s.train_info_sums.assign(spec.info_names.size(), 0.0);
+  s.best = nullptr;
+  s.act_rngs.resize(size_t(t.num_envs));
+  for (int i = 0; i < t.num_envs; ++i) s.act_rngs[size_t(i)].reseed(uint64_t(t.seed), kActStream + uint64_t(i));
+  s.obs = initial.obs;
+}
+
+std::string save_run_payload(const RunState& s, const Learner& learner, const BatchEnv& env) {
+  std::ostringstream p;
+  RunCounters c = s.counters;
+  bin::write_tag(p, kTagCounters);
+  c.visit([&](auto& x) { bin::write_pod(p, x); });
+  bin::write_vec(p, s.train_info_sums);
+  const std::string best = s.best.dump();  // doubles print with 17 digits: exact round trip
+  bin::write_vec(p, std::vector<char>(best.begin(), best.end()));
+  bin::write_tag(p, kTagLearner);
+  learner.save(p);
+  bin::write_tag(p, kTagStreams);
+  for (const Rng& r : s.act_rngs) bin::write_rng(p, r);
+  bin::write_vec(p, s.obs);
+  bin::write_tag(p, kTagEnv);
+  env.save_state(p);
+  return p.str();
+}
+
+void load_run_payload(const std::string& payload, const TrainConfig& t, const EnvSpec& spec, RunState& s,
+                      Learner& learner, BatchEnv& env) {
+  std::istringstream p(payload);
+  RunState r = s;
+  bin::expect_tag(p, kTagCounters, "counters");
+  r.counters.visit([&](auto& x) { x = bin::read_pod<std::decay_t<decltype(x)>>(p, "counters"); });
+  bin::read_vec(p, r.train_info_sums, "train_info_sums", int64_t(spec.info_names.size()));
+  std::vector<char> best;
+  bin::read_vec(p, best, "best evaluation");
+  try {
+    r.best = nlohmann::json::parse(best.begin(), best.end());
+  } catch (const nlohmann::json::exception&) {
+    throw std::runtime_error("checkpoint's best evaluation record is not JSON");
+  }
+  validate(r.counters, t, r.train_info_sums, r.best);
+  bin::expect_tag(p, kTagLearner, "learner");
+  learner.load(p, r.counters.env_steps);
+  bin::expect_tag(p, kTagStreams, "streams");
+  for (Rng& x : r.act_rngs) bin::read_rng(p, x, "action rng");
+  bin::read_vec(p, r.obs, "obs", int64_t(t.num_envs) * spec.obs_dim);
+  for (float x : r.obs)
+    if (!std::isfinite(x)) throw std::runtime_error("checkpoint observation holds a non-finite value");
+  bin::expect_tag(p, kTagEnv, "env");
+  env.load_state(p);
+  if (p.peek() != std::char_traits<char>::eof()) throw std::runtime_error("checkpoint payload is longer than its sections");
+  s = std::move(r);
+}
+
+}  // namespace atacom
