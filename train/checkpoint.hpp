@@ -17,7 +17,7 @@
 
 namespace atacom {
 
-constexpr uint32_t kCheckpointVersion = 2;  // 2: trainer counters gained train_violations
+constexpr uint32_t kCheckpointVersion = 3;  // 2: trainer counters gained train_violations; 3: learner payload, policy files
 
 struct Checkpoint {
   nlohmann::json manifest;
