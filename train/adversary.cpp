@@ -42,10 +42,10 @@ void from_json(const nlohmann::json& j, AdversaryConfig& c) {
     for (auto it = s->begin(); it != s->end(); ++it) sac[it.key()] = it.value();
     a.sac = sac.get<SacConfig>();
   }
-  r.get("collision_bonus", a.collision_bonus);
-  r.get("scale_floor", a.scale_floor);
-  r.get("reward_cap", a.reward_cap);
-  r.get("worst_states", a.worst_states);
+  r.get("collision_bonus", a.collision_bonus, range::closed(0.0, 1e6));
+  r.get("scale_floor", a.scale_floor, range::open_closed(0.0, 1e6));
+  r.get("reward_cap", a.reward_cap, range::open_closed(0.0, 1e6));
+  r.get("worst_states", a.worst_states, range::closed(1, 1000));
   r.finish();
   auto bad = [](const std::string& what) { throw std::invalid_argument("config: adversary." + what); };
   if (!(std::isfinite(a.collision_bonus) && a.collision_bonus >= 0)) bad("collision_bonus must be finite and >= 0");

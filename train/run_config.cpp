@@ -6,6 +6,7 @@
 #include "atacom/learner.hpp"
 #include "atacom/trainer.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 #include "train/algorithms.hpp"
 
 namespace atacom {
@@ -22,13 +23,13 @@ void from_json(const nlohmann::json& j, TrainConfig& c) {
   ConfigReader r(j, "train");
   r.get("env", c.env);
   r.get("algo", c.algo);
-  r.get("seed", c.seed);
-  r.get("steps", c.steps);
-  r.get("num_envs", c.num_envs);
-  r.get("eval_every", c.eval_every);
-  r.get("eval_episodes", c.eval_episodes);
+  r.get("seed", c.seed, range::at_least<int64_t>(0));
+  r.get("steps", c.steps, range::closed<int64_t>(1, limits::kMaxSteps));
+  r.get("num_envs", c.num_envs, range::closed(1, limits::kMaxEnvs));
+  r.get("eval_every", c.eval_every, range::closed<int64_t>(1, limits::kMaxSteps));
+  r.get("eval_episodes", c.eval_episodes, range::closed(1, limits::kMaxEvalEpisodes));
   r.get("eval_deterministic", c.eval_deterministic);
-  r.get("checkpoint_every", c.checkpoint_every);
+  r.get("checkpoint_every", c.checkpoint_every, range::closed<int64_t>(0, limits::kMaxSteps));
   r.finish();
 }
 
@@ -41,9 +42,9 @@ void validate(const TrainConfig& c) {
     bad(std::string("algo: ") + e.what());
   }
   if (c.seed < 0) bad("seed must be >= 0");
-  if (c.steps < 1) bad("steps must be >= 1");
+  if (c.steps < 1 || c.steps > limits::kMaxSteps) bad("steps must be in [1, 10^12]");
   if (c.num_envs < 1 || c.num_envs > (1 << 20)) bad("num_envs must be in [1, 2^20]");
-  if (c.eval_every < 1) bad("eval_every must be >= 1");
+  if (c.eval_every < 1 || c.eval_every > limits::kMaxSteps) bad("eval_every must be in [1, 10^12]");
   if (c.eval_episodes < 1 || c.eval_episodes > 100000) bad("eval_episodes must be in [1, 100000]");
   if (c.checkpoint_every < 0) bad("checkpoint_every must be >= 0");
   env_entry(c.env);  // unknown env names fail here, listing the known ones

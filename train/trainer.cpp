@@ -452,6 +452,7 @@ TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts) {
     throw std::invalid_argument("output directory '" + opts.out_dir +
                                 "' is not empty; pass --resume to continue that run or choose a new directory");
   }
+  remove_stale_temp_files(opts.out_dir);  // temp files a killed earlier process of this run left behind
   Run run(cfg, opts);  // builds envs and agent: config errors surface here, before any file is written
   return run.go();
 }
