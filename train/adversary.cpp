@@ -18,9 +18,14 @@ nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nl
 AdversaryConfig default_adversary_config() {
   AdversaryConfig c;
   c.sac = default_sac_config();
+  c.sac.actor.hidden = c.sac.critic.hidden = {64, 64};
+  c.sac.lr_actor = c.sac.lr_critic = 1e-3;
+  c.sac.lr_alpha = 3e-4;
   c.sac.initial_replay = 1000;
   c.sac.warmup = 1000;
+  c.sac.replay_capacity = 100000;
   c.sac.gamma = 0.99;
+  c.collision_bonus = 100.0;
   return c;
 }
 

@@ -27,14 +27,15 @@ namespace atacom {
 
 struct AdversaryConfig {
   SacConfig sac;                 // the adversary's own SAC settings (not the env's per-layer ones)
-  double collision_bonus = 10.0; // added to the reward of a step that collides
+  double collision_bonus = 100.0; // added to the reward of a step that collides
   double scale_floor = 0.05;     // lower bound of the row scales, in the rows' units (m, rad)
   double reward_cap = 1.0;       // cap of the row term beyond the boundary
   int worst_states = 5;          // episodes kept in summary.json's adversary.worst
 };
-// The one default factory: SAC defaults with initial replay and warm-up
-// 1000 and gamma 0.99 (an attack runs for tens of thousands of steps, not
-// millions), bonus 10, floor 0.05, cap 1, 5 worst states.
+// The one default factory: an attack runs for tens of thousands of steps,
+// not millions, so a small fast SAC: 64-64 networks, lr 1e-3 (alpha 3e-4),
+// initial replay and warm-up 1000, replay 100k, gamma 0.99; bonus 100
+// (a collision outweighs any path of row terms), floor 0.05, cap 1, 5 worst states.
 AdversaryConfig default_adversary_config();
 void to_json(nlohmann::json& j, const AdversaryConfig& c);
 void from_json(const nlohmann::json& j, AdversaryConfig& c);  // strict; the "sac" subsection as SacConfig
@@ -58,6 +59,7 @@ class AdversaryLearner final : public Learner {
   uint64_t state_hash() const override;
 
   double max_constraint() const { return max_c_; }
+  const std::vector<float>& last_reward() const { return reward_; }  // (N) the shaped reward of the last step
   const std::vector<double>& row_scale() const { return scale_; }
 
  private:

@@ -41,6 +41,7 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
   std::vector<int> len(size_t(episodes), 0);
   std::vector<uint8_t> term(size_t(episodes), 0);
   std::vector<int32_t> viol(size_t(episodes), 0);
+  std::vector<double> emax(size_t(episodes), -std::numeric_limits<double>::infinity());
   // Per env of the batch.
   std::vector<Rng> rngs(static_cast<size_t>(N));
   std::vector<double> actions(size_t(N) * A, 0.0), gt(size_t(N), 1.0);
@@ -75,7 +76,7 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
         for (int r = 0; r < k; ++r) {
           const double c = b.constraints[size_t(i) * k + r];
           v = v || c > spec.constraint_tolerance[size_t(r)];
-          if (std::isfinite(c)) max_c = std::max(max_c, c);
+          if (std::isfinite(c)) emax[e] = std::max(emax[e], c);
         }
         viol[e] += v;
         for (int c = 0; c < ni; ++c) {
@@ -122,7 +123,13 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
   r.return_std = std::sqrt(s2 / M);
   r.discounted_return_std = std::sqrt(sd2 / M);
   r.avg_episode_steps = steps / M;
+  double emax_sum = 0;
+  for (int i = 0; i < M; ++i) {
+    max_c = std::max(max_c, emax[size_t(i)]);
+    emax_sum += emax[size_t(i)];
+  }
   r.max_constraint = k > 0 && std::isfinite(max_c) ? max_c : kNaN;
+  r.episode_max_constraint = k > 0 && std::isfinite(emax_sum) ? emax_sum / M : kNaN;
   r.final_distance = r.collisions = kNaN;
   for (int c = 0; c < ni; ++c) {
     if (spec.info_names[size_t(c)] == "final_distance") r.final_distance = r.info[size_t(c)];
@@ -140,7 +147,8 @@ nlohmann::json eval_json(const EvalResult& r) {
                       {"early_terminations", r.early_terminations},
                       {"avg_episode_steps", r.avg_episode_steps},
                       {"violations", r.violations},
-                      {"eval_max_constraint", jnum(r.max_constraint)}};
+                      {"eval_max_constraint", jnum(r.max_constraint)},
+                      {"eval_episode_max_constraint", jnum(r.episode_max_constraint)}};
   for (size_t c = 0; c < r.info_names.size() && c < r.info.size(); ++c) {
     const std::string& name = r.info_names[c];
     s[name] = jnum(r.info[c]);

@@ -20,7 +20,8 @@ std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector
   cols.insert(cols.end(), learner_columns.begin(), learner_columns.end());
   cols.insert(cols.end(), spec.info_names.begin(), spec.info_names.end());
   for (const char* c : {"early_terminations", "avg_episode_steps", "violations", "eval_discounted_return_mean",
-                        "eval_discounted_return_std", "eval_max_constraint", "train_episodes", "train_terminations",
+                        "eval_discounted_return_std", "eval_max_constraint", "eval_episode_max_constraint",
+                        "train_episodes", "train_terminations",
                         "train_violations"})
     cols.push_back(c);
   for (size_t c = 0; c < spec.info_names.size() && c < spec.info_reduce.size(); ++c)

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "src/core/binary_io.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -32,8 +33,8 @@ void validate(const RunCounters& c, const TrainConfig& t, const std::vector<doub
   const int N = t.num_envs;
   auto bad = [](const std::string& what) { throw std::runtime_error("checkpoint counter " + what); };
   auto n = [](int64_t v) { return std::to_string(v); };
-  if (c.env_steps < 1 || c.env_steps % N != 0)
-    bad("env_steps = " + n(c.env_steps) + " is not a positive multiple of num_envs " + n(N));
+  if (c.env_steps < 1 || c.env_steps > limits::kMaxSteps || c.env_steps % N != 0)
+    bad("env_steps = " + n(c.env_steps) + " is not a multiple of num_envs " + n(N) + " in [1, 10^12]");
   const int64_t want_eval = (c.env_steps / t.eval_every + 1) * t.eval_every;
   if (c.next_eval != want_eval)
     bad("next_eval = " + n(c.next_eval) + ", expected " + n(want_eval) + " after " + n(c.env_steps) + " steps");

@@ -204,7 +204,7 @@ void Run::record(const EvalResult& ev) {
   }
   row.insert(row.end(), ev.info.begin(), ev.info.end());
   for (double v : {double(ev.early_terminations), ev.avg_episode_steps, ev.violations, ev.discounted_return_mean,
-                   ev.discounted_return_std, ev.max_constraint, double(c.train_episodes),
+                   ev.discounted_return_std, ev.max_constraint, ev.episode_max_constraint, double(c.train_episodes),
                    double(c.train_terminations), double(c.train_violations)})
     row.push_back(v);
   for (int col = 0; col < ninfo_; ++col)

@@ -137,7 +137,8 @@ inline std::unique_ptr<TrainedPolicy> load_run_policy(const std::string& run_dir
 // eval_return_std, train_episode_return, <learner columns>, <info columns>,
 // early_terminations, avg_episode_steps, violations,
 // eval_discounted_return_mean, eval_discounted_return_std,
-// eval_max_constraint, train_episodes, train_terminations, train_violations,
+// eval_max_constraint, eval_episode_max_constraint, train_episodes,
+// train_terminations, train_violations,
 // train_<info> for every summed info column.
 std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector<std::string>& learner_columns);
 
