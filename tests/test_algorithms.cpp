@@ -119,6 +119,17 @@ TEST_CASE("algorithms: every name is an action source under a safety layer", "[a
   CHECK(run_config_json(resolve_run_config(run_config_json(rc))) == run_config_json(rc));
 }
 
+TEST_CASE("algorithms: the shipped run configs (configs/*.json) still resolve", "[algorithms]") {
+  int n = 0;
+  for (const auto& f : fs::directory_iterator(fs::path(ATACOM_TEST_DATA_DIR) / ".." / ".." / "configs")) {
+    if (f.path().extension() != ".json") continue;
+    INFO("config " << f.path());
+    CHECK_NOTHROW(resolve_run_config(json::parse(slurp(f.path().string()))));
+    ++n;
+  }
+  CHECK(n >= 5);
+}
+
 TEST_CASE("algorithms: every learner checkpoints, resumes bitwise and is identical for 1 and 2 threads", "[algorithms]") {
   for (const char* name : {"sac", "atacom-sac", "safelayer-sac", "attack", "attack-atacom", "attack-safelayer"}) {
     INFO("algo " << name);

@@ -157,7 +157,7 @@ TEST_CASE("closed loop: random policies stay safe through the projector (short)"
   }
 }
 
-TEST_CASE("closed loop: 100k steps per system stay below the stated bound; without ATACOM they violate", "[slow]") {
+TEST_CASE("closed loop: 100k steps per system stay below the stated bound, without ATACOM they violate", "[slow]") {
   for (auto& sc : scenarios()) {
     for (uint64_t seed : {11u, 12u}) {
       const RolloutStats safe = rollout(*sc, 50, 1000, seed, true);

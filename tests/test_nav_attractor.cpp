@@ -80,7 +80,7 @@ LaResult run_la(bool atacom) {
 
 }  // namespace
 
-TEST_CASE("nav attractor: LA reaches the goal; LA-ATACOM collides less", "[nav_attractor]") {
+TEST_CASE("nav attractor: LA reaches the goal, LA-ATACOM collides less", "[nav_attractor]") {
   const LaResult la = run_la(false), la_atacom = run_la(true);
   INFO("LA: " << la.episodes << " episodes, " << la.collisions << " collisions, " << la.at_goal
               << " ended at the goal without a collision; LA-ATACOM: " << la_atacom.episodes << " episodes, " << la_atacom.collisions

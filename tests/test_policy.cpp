@@ -17,7 +17,7 @@
 
 using namespace atacom;
 
-TEST_CASE("policy: random draws row i from rngs[i]; zero is zero", "[policy]") {
+TEST_CASE("policy: random draws row i from rngs[i], zero is zero", "[policy]") {
   const auto r = make_random_policy(4, 3);
   std::vector<Rng> a = {Rng(5, 0), Rng(5, 1), Rng(5, 2)};
   std::vector<double> batch(9);

@@ -132,7 +132,7 @@ TEST_CASE("run files: impossible checkpoint counters are refused by name, files 
   fs::remove_all(dir);
 }
 
-TEST_CASE("run files: a budget below what is done is refused; config.json and summary.json stay consistent", "[run_files]") {
+TEST_CASE("run files: a budget below what is done is refused, config.json and summary.json stay consistent", "[run_files]") {
   const std::string dir = tmp_dir("budget"), log = dir + ".log";
   train(small_run(600), dir);
   CHECK_THROWS_WITH(train(small_run(200), dir, true), Catch::Contains("below the 600 env steps"));
@@ -162,7 +162,7 @@ TEST_CASE("run files: a symlinked progress.csv is replaced on resume, never writ
   fs::remove_all(dir);
 }
 
-TEST_CASE("run files: --config is a file for every subcommand; flags that do not apply are rejected", "[run_files]") {
+TEST_CASE("run files: --config is a file for every subcommand, flags that do not apply are rejected", "[run_files]") {
   const std::string dir = tmp_dir("flags"), log = dir + ".log", cfg = dir + ".json";
   std::ofstream(cfg) << R"({"velocity_scale": 0.4})";
   // shelf-real: a file path (before this change: inline JSON only)

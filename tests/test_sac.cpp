@@ -66,7 +66,7 @@ TEST_CASE("sac: config defaults follow the paper and round-trip through JSON", "
                       Catch::Contains("dropout"));
 }
 
-TEST_CASE("sac: actions are in [-1, 1]; deterministic is tanh(mean), stochastic uses the row's stream", "[sac]") {
+TEST_CASE("sac: actions are in [-1, 1], deterministic is tanh(mean), stochastic uses the row's stream", "[sac]") {
   Sac sac(4, 3, small_config(), 1);
   std::vector<float> obs(5 * 4);
   Rng r(2, 0);
