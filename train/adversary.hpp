@@ -49,6 +49,8 @@ class AdversaryLearner final : public Learner {
   Policy& policy() override { return sac_.policy(); }
   void observe(const float* obs, const double* actions, const EnvBuffers& after) override;
   int64_t updates() const override { return sac_.updates(); }
+  // The best evaluation: the largest per-episode maximum constraint value.
+  double best_score(const EvalResult& ev) const override { return ev.episode_max_constraint; }
   std::vector<std::string> progress_columns() const override;
   std::vector<double> progress_values() override;
   // {"alpha", "adversary": {"max_constraint", "max_constraint_row", "row_scale", "worst": [...]}}

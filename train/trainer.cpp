@@ -218,13 +218,15 @@ void Run::record(const EvalResult& ev) {
   write_file_atomic(path("progress.svg"),
                     learning_curve_svg(t.env + " / " + t.algo + " / seed " + std::to_string(t.seed),
                                        progress_.series(0), progress_.series(3), progress_.series(4)));
-  // The best evaluation by eval return (the first of equals; NaN never wins).
-  const nlohmann::json& prev = st_.best.is_null() ? nlohmann::json() : st_.best["eval_return_mean"];
-  const bool better = st_.best.is_null() ||
-                      (std::isfinite(ev.return_mean) && (!prev.is_number() || ev.return_mean > prev.get<double>()));
+  // The best evaluation by the learner's score (the env's return without a
+  // learner; the first of equals; NaN never wins).
+  const double score = learner_ ? learner_->best_score(ev) : ev.return_mean;
+  const nlohmann::json& prev = st_.best.is_null() ? nlohmann::json() : st_.best["score"];
+  const bool better = st_.best.is_null() || (std::isfinite(score) && (!prev.is_number() || score > prev.get<double>()));
   if (better) {
     st_.best = eval_json(ev);
     st_.best["env_steps"] = c.env_steps;
+    st_.best["score"] = std::isfinite(score) ? nlohmann::json(score) : nlohmann::json(nullptr);
     if (learner_) write_policy(run_policy_file(RunPolicy::Best));
   }
 }

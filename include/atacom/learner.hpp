@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env.hpp"
+#include "atacom/evaluate.hpp"
 #include "atacom/policy.hpp"
 #include "atacom/safety_layer.hpp"
 
@@ -45,6 +46,10 @@ class Learner {
   // (means since the previous row; the call starts a new window).
   virtual std::vector<std::string> progress_columns() const = 0;
   virtual std::vector<double> progress_values() = 0;
+  // What makes an evaluation the best one (policy_best.bin): higher is
+  // better. The env's return by default; the adversary's is how close its
+  // episodes come to breaking a row.
+  virtual double best_score(const EvalResult& ev) const { return ev.return_mean; }
   // Keys added to summary.json (e.g. "alpha") and to checkpoint.json.
   virtual nlohmann::json summary() const = 0;
   virtual nlohmann::json manifest() const = 0;

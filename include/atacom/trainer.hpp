@@ -11,7 +11,7 @@
 //                    evaluation ("best"), the policy files, the host
 //   checkpoint.bin   checkpoint (train/checkpoint.hpp); checkpoint.json its manifest
 //   policy_final.bin the policy at the end of training   (learning algorithms only)
-//   policy_best.bin  the policy of the best evaluation by eval_return_mean
+//   policy_best.bin  the policy of the best evaluation (Learner::best_score: SAC's eval return)
 // env_steps counts transitions over all N envs. Evaluation uses its own env
 // batch and RNG streams (atacom/evaluate.hpp), so it never changes the
 // training trajectory. Algorithms without a learner (la, random, zero and
