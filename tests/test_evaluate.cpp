@@ -27,6 +27,20 @@ namespace {
 
 const fs::path kFixtures = fs::path(ATACOM_TEST_DATA_DIR) / "eval_fixture";
 
+// The fixtures were written by the Release build with -march=native on an
+// AVX-512 + FMA CPU: its bits are what they hold (docs/determinism.md).
+// Other builds (the sanitizer build at -O1, portable, other ISAs) fuse and
+// vectorise differently and agree only to rounding, so there the evaluator
+// check is approximate and the trajectory check is skipped.
+#if defined(__x86_64__) && defined(__FMA__) && defined(__AVX512F__) && defined(__OPTIMIZE__) && \
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+constexpr bool kFixtureBuild = true;
+#else
+constexpr bool kFixtureBuild = false;
+#endif
+
+bool same(double a, double b) { return kFixtureBuild ? a == b : a == Approx(b).epsilon(1e-4).margin(1e-6); }
+
 std::string slurp(const fs::path& p) {
   std::ifstream f(p, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
@@ -81,15 +95,16 @@ TEST_CASE("evaluate: reproduces the numbers the pre-seam SAC trainer wrote for a
     const EvalResult r = evaluate(*env, policy, t.eval_episodes, uint64_t(t.seed), t.eval_deterministic);
     // summary.json holds the final evaluation's doubles exactly.
     const json sum = json::parse(slurp(dir / "summary.json"));
-    CHECK(r.return_mean == sum["eval_return_mean"].get<double>());
-    CHECK(r.return_std == sum["eval_return_std"].get<double>());
+    CHECK(same(r.return_mean, sum["eval_return_mean"].get<double>()));
+    CHECK(same(r.return_std, sum["eval_return_std"].get<double>()));
     CHECK(r.early_terminations == sum["early_terminations"].get<int>());
-    CHECK(r.avg_episode_steps == sum["avg_episode_steps"].get<double>());
-    CHECK(r.violations == sum["violations"].get<double>());
+    CHECK(same(r.avg_episode_steps, sum["avg_episode_steps"].get<double>()));
+    CHECK(same(r.violations, sum["violations"].get<double>()));
     for (size_t c = 0; c < r.info_names.size(); ++c) {
       INFO("info column " << r.info_names[c]);
-      CHECK(r.info[c] == sum[r.info_names[c]].get<double>());
+      CHECK(same(r.info[c], sum[r.info_names[c]].get<double>()));
     }
+    if (!kFixtureBuild) continue;
     // and the last progress row the same numbers to 9 digits.
     const Csv csv = read_csv(dir / "progress.csv");
     const size_t last = csv.rows.size() - 1;
@@ -103,6 +118,10 @@ TEST_CASE("evaluate: reproduces the numbers the pre-seam SAC trainer wrote for a
 TEST_CASE("evaluate: training through the learner contract is the pre-seam trajectory, bitwise", "[evaluate]") {
   // The fixtures' runs again: the agent hash and every progress cell the old
   // trainer wrote (but wall_s) come out the same.
+  if (!kFixtureBuild) {
+    WARN("not the build that wrote the fixtures (Release, native AVX-512 + FMA): trajectories differ in the last bits; skipped");
+    return;
+  }
   for (const char* name : {"nav_atacom_sac", "table_sac", "pendulum_sac_sampled"}) {
     INFO("fixture " << name);
     const fs::path src = kFixtures / name;
