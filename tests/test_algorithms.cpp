@@ -59,7 +59,8 @@ json small(const std::string& algo, int64_t steps) {
   json sac = {{"actor", net}, {"critic", net}, {"batch_size", 32}, {"initial_replay", 100}, {"warmup", 150},
               {"replay_capacity", 2000}, {"lr_alpha", 1e-3}};
   json cfg = {{"train", {{"env", "nav"}, {"algo", algo}, {"steps", steps}, {"num_envs", 2}, {"eval_every", 200},
-                         {"eval_episodes", 2}, {"seed", 3}}}};
+                         {"eval_episodes", 2}, {"seed", 3}}},
+              {"env", {{"horizon", 100}}}};  // short episodes: quick evaluations, several resets
   const Algorithm& a = find_algorithm(algo);
   if (a.learner == "sac") cfg["sac"] = sac;
   if (a.learner == "adversary") cfg["adversary"] = {{"sac", sac}};
@@ -138,12 +139,12 @@ TEST_CASE("algorithms: every learner checkpoints, resumes bitwise and is identic
       WARN("algo " << name << ": the " << safety_layer_name(a.safety) << " layer is not in this build; skipped");
       continue;
     }
-    const json cfg = small(name, 600);
+    const json cfg = small(name, 400);
     const std::string full = tmp_dir(std::string(name) + "_full"), part = tmp_dir(std::string(name) + "_part"),
                       one = tmp_dir(std::string(name) + "_one");
     set_num_threads(2);
     const TrainSummary u = train(cfg, full);
-    const TrainSummary s = train(cfg, part, false, 300);  // an evaluation boundary is at 200, 400: its own checkpoint
+    const TrainSummary s = train(cfg, part, false, 300);  // evaluations at 200 and 400: 300 gets its own checkpoint
     REQUIRE(s.env_steps == 300);
     REQUIRE(!fs::exists(part + "/summary.json"));
     const TrainSummary r = train(cfg, part, true);
