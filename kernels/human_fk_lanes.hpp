@@ -103,6 +103,20 @@ static inline void human_load_pose_lanes(const HumanBatch& B, int e0, int cnt, v
   }
 }
 
+// Capsules and velocities of cnt consecutive envs from per-env arrays laid
+// out like HumanBatch::cap / cap_vel (16 x 2 x 3 per env); lanes past cnt
+// repeat the last env. vel == nullptr: velocities 0.
+static inline void human_load_caps_lanes(const double* cap, const double* vel, int cnt, HumanCapsLanes& o) {
+  constexpr int stride = kHumanCapsules * 6;
+  for (int c = 0; c < kHumanCapsules; ++c)
+    for (int r = 0; r < 3; ++r) {
+      o.a[c][r] = load_strided(cap + c * 6 + r, stride, cnt);
+      o.b[c][r] = load_strided(cap + c * 6 + 3 + r, stride, cnt);
+      o.va[c][r] = vel ? load_strided(vel + c * 6 + r, stride, cnt) : vd{};
+      o.vb[c][r] = vel ? load_strided(vel + c * 6 + 3 + r, stride, cnt) : vd{};
+    }
+}
+
 // Capsules (and velocities) of lanes [0, cnt) into envs [e0, e0 + cnt) of the batch.
 static inline void human_store_caps_lanes(const HumanCapsLanes& o, HumanBatch& B, int e0, int cnt,
                                           bool with_velocity = true) {

@@ -45,15 +45,8 @@ void human_rows_range(const HumanRowsConst& k, const HumanFkConst& hk, const Hum
   for (int e0 = begin; e0 < end; e0 += kLanes) {
     const int cnt = std::min(kLanes, end - e0);
     lanes::HumanCapsLanes h;
-    const double* cap = &B.cap[static_cast<size_t>(e0) * kCapStride];
-    const double* vel = &B.cap_vel[static_cast<size_t>(e0) * kCapStride];
-    for (int cc = 0; cc < kHumanCapsules; ++cc)
-      for (int r = 0; r < 3; ++r) {
-        h.a[cc][r] = lanes::load_strided(cap + cc * 6 + r, kCapStride, cnt);
-        h.b[cc][r] = lanes::load_strided(cap + cc * 6 + 3 + r, kCapStride, cnt);
-        h.va[cc][r] = lanes::load_strided(vel + cc * 6 + r, kCapStride, cnt);
-        h.vb[cc][r] = lanes::load_strided(vel + cc * 6 + 3 + r, kCapStride, cnt);
-      }
+    lanes::human_load_caps_lanes(&B.cap[static_cast<size_t>(e0) * kCapStride], &B.cap_vel[static_cast<size_t>(e0) * kCapStride],
+                                 cnt, h);
     vd p[kHumanMaxPoi][3], Jp[kHumanMaxPoi][3][kHumanMaxNq];
     const int ps = P * 3, js = P * 3 * nq;
     for (int i = 0; i < P; ++i)
@@ -74,6 +67,14 @@ void human_rows_range(const HumanRowsConst& k, const HumanFkConst& hk, const Hum
       }
     }
   }
+}
+
+double human_segment_distance(const HumanFkConst& k, const double* cap, const double* a, const double* b) {
+  double best = INFINITY;
+  for (int c = 0; c < kHumanCapsules; ++c)
+    best = std::min(best, std::sqrt(human_impl::segment_segment_distance2(a, b, cap + c * 6, cap + c * 6 + 3)) -
+                              k.cap_radius[c]);
+  return best;
 }
 
 void human_contact_range(const HumanBatch& B, const HumanFkConst& k, const double* items, const double* radii,

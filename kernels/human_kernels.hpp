@@ -81,6 +81,12 @@ struct HumanRowsConst {
 void human_rows_range(const HumanRowsConst& k, const HumanFkConst& hk, const HumanBatch& batch, const double* poi,
                       const double* J_poi, double* c, double* Jq, double* dcdt, double* d_exact, int begin, int end);
 
+// Exact signed distance between the segment [a, b] and the human whose
+// capsules are cap (16 x 2 x 3, HumanBatch::cap layout of one env): the
+// smallest segment-to-surface distance (subtract the segment's radius to
+// test contact).
+double human_segment_distance(const HumanFkConst& k, const double* cap, const double* a, const double* b);
+
 // Exact contact: items are capsules (a == b for a sphere) of the robot in the
 // robot base frame, per env (N x n_items x 2 x 3) with radii (n_items); an
 // env is in contact when any item is closer than radius_item + radius_capsule

@@ -266,6 +266,12 @@ TEST_CASE("human contact kernel matches the golden-section reference", "[human]"
     }
     const double ref = human_min_distance_reference(m, humans[static_cast<size_t>(e)], parts);
     CHECK(std::abs(dmin[e] - ref) < 1e-8);
+    for (const RobotPart& part : parts) {  // one segment at a time (the moving field's ground truth)
+      const double one = human_min_distance_reference(m, humans[static_cast<size_t>(e)], {part});
+      const double d = human_segment_distance(m.fk, &B.cap[static_cast<size_t>(e) * kHumanCapsules * 6], part.a.data(),
+                                              part.b.data());
+      CHECK(std::abs(d - part.radius - one) < 1e-8);
+    }
     CHECK(contact[e] == (ref < 0.0 ? 1 : 0));
     CHECK(contact2[e] == contact[e]);
     hits += contact[e];
