@@ -16,7 +16,10 @@
 #include "envs/arm/human_model.hpp"
 #include "envs/arm/human_motion.hpp"
 #include "kernels/human_kernels.hpp"
+#include "envs/arm/arm_scene.hpp"
+#include "envs/arm/tiago_model.hpp"
 #include "src/core/data_dir.hpp"
+#include "src/core/sdf.hpp"
 
 using namespace atacom;
 
@@ -177,6 +180,31 @@ TEST_CASE("human motion has every activity, a held-out split, and no jumps at bo
     }
     CHECK(std::hypot(at(lib, f, 0) - at(lib, f - 1, 0), at(lib, f, 1) - at(lib, f - 1, 1)) * fps <= b.walk_speed_max);
   }
+}
+
+TEST_CASE("human motion keeps out of the table and away from the robot's body", "[human]") {
+  // The person reaches over the table but never into it, and never walks
+  // into the robot, which could not get out of the way (robot body at the
+  // HRI start's torso height 0.3 m).
+  const HumanMotionLibrary& lib = library();
+  const HumanModel& m = model();
+  const HumanMotionConfig& c = lib.config;
+  const Shape table = Shape::box(c.table_center, c.table_half, "table");
+  const ArmScene scene = build_arm_scene(default_arm_scene_config(ArmTask::Table), load_tiago_arm_model(0.3));
+  double table_gap = INFINITY, body_gap = INFINITY;
+  for (int f = 0; f < lib.num_frames; f += 2) {
+    double pose[kHumanPoseDim];
+    lib.sample(f, pose, nullptr);
+    const HumanFkResult h = human_fk_reference(m, pose);
+    for (size_t k = 0; k < kHumanCapsules; ++k) {
+      table_gap = std::min(table_gap, segment_distance(table, h.a[k], h.b[k]) - m.capsules[k].radius);
+      for (const Shape& s : scene.body.shapes)
+        body_gap = std::min(body_gap, segment_distance(s, h.a[k], h.b[k]) - m.capsules[k].radius);
+    }
+  }
+  INFO("table gap " << table_gap << " m, body gap " << body_gap << " m");
+  CHECK(table_gap >= 0.0);
+  CHECK(body_gap >= 0.25);
 }
 
 TEST_CASE("human motion playback: rates are the derivatives of the interpolated poses", "[human]") {

@@ -22,7 +22,7 @@
 
 namespace atacom {
 
-inline constexpr int kHumanMotionVersion = 1;  // bump when the generator's output changes
+inline constexpr int kHumanMotionVersion = 2;  // bump when the generator's output changes
 
 enum class HumanActivity : uint8_t { Walk = 0, Reach = 1, Phone = 2, Turn = 3, Pause = 4 };
 std::string human_activity_name(HumanActivity a);
@@ -46,7 +46,7 @@ struct HumanMotionConfig {
   double test_fraction = 0.15;         // share of the segments (the last ones) held out
   Eigen::Vector3d table_center{0.8, -0.15, 0.4};  // HRI table box (reference section 4.4)
   Eigen::Vector3d table_half{0.4, 0.4, 0.4};
-  double clearance = 0.38;             // walking path: pelvis axis to the table's edge, m
+  double clearance = 0.42;             // walking path: pelvis axis to the table's edge, m
   double x_min = 0.55;                 // the path's ends on the robot's side (x), m
   double walk_speed_min = 0.6;         // cruise speed of a walk, sampled in [min, max] m/s
   double walk_speed_max = 1.3;

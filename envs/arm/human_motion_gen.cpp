@@ -74,6 +74,8 @@ class Generator {
       elbow_[s] = idx(("elbow_" + p + "_flexion").c_str());
       wrist_[s] = idx(("wrist_" + p + "_flexion").c_str());
       tip_[s] = m_.joint_index("fingertip_" + p);
+      clearance_caps_.push_back(m_.capsule_index("forearm_" + p));
+      clearance_caps_.push_back(m_.capsule_index("hand_" + p));
     }
     pelvis_twist_ = idx("pelvis_twist");
     pelvis_lateral_ = idx("pelvis_lateral");
@@ -122,8 +124,8 @@ class Generator {
       const int begin = segments_.empty() ? 0 : segments_.back().end;
       const double r = rng_.uniform();
       HumanActivity a;
-      if (r < 0.32) a = HumanActivity::Walk;
-      else if (r < 0.62) a = HumanActivity::Reach;
+      if (r < 0.34) a = HumanActivity::Walk;
+      else if (r < 0.58) a = HumanActivity::Reach;
       else if (r < 0.75) a = HumanActivity::Phone;
       else if (r < 0.85) a = HumanActivity::Turn;
       else a = HumanActivity::Pause;
@@ -322,20 +324,20 @@ class Generator {
     return fk.p[static_cast<size_t>(tip_[side])];
   }
 
-  // Lowest clearance above the table top of the forearm and hand axes of
-  // `side` (their radii included) while they are over the table.
-  double table_clearance(int side, const Posture& p) const {
+  // Lowest clearance above the table top of both forearms and hands (their
+  // radii included) where they are over the table (1 m when none is).
+  double table_clearance(const Posture& p) const {
     double pose[kHumanPoseDim] = {s_.x, s_.y, 0.0, s_.yaw};
     for (int d = 0; d < kHumanDofs; ++d) pose[kHumanRootDofs + d] = p[d];
     const HumanFkResult fk = human_fk_reference(m_, pose);
     double worst = 1.0;
-    for (const char* seg : {"forearm_", "hand_"}) {
-      const int c = m_.capsule_index(std::string(seg) + (side == 0 ? "l" : "r"));
+    for (const int c : clearance_caps_) {
+      const size_t sc = static_cast<size_t>(c);
       for (int k = 0; k <= 4; ++k) {
-        const Eigen::Vector3d q = fk.a[static_cast<size_t>(c)] + 0.25 * k * (fk.b[static_cast<size_t>(c)] - fk.a[static_cast<size_t>(c)]);
+        const Eigen::Vector3d q = fk.a[sc] + 0.25 * k * (fk.b[sc] - fk.a[sc]);
         const bool over = q.x() > table_lo_.x() - 0.05 && q.x() < table_hi_.x() + 0.05 && q.y() > table_lo_.y() - 0.05 &&
                           q.y() < table_hi_.y() + 0.05;
-        if (over) worst = std::min(worst, q.z() - m_.capsules[static_cast<size_t>(c)].radius - table_top_);
+        if (over) worst = std::min(worst, q.z() - m_.capsules[sc].radius - table_top_);
       }
     }
     return worst;
@@ -356,9 +358,17 @@ class Generator {
     return {s_.x + 0.6 * std::cos(yaw), s_.y + 0.6 * std::sin(yaw), table_top_ + 0.06};
   }
 
-  // Reach posture for an object: random search, then local refinement, over
-  // trunk lean and twist and the arm's angles.
-  Posture reach_posture(int side, const Eigen::Vector3d& obj) {
+  struct Reach {
+    Posture lift, at;  // forearm raised (elbow bent only); fingertip at the object
+  };
+
+  // Reach postures for an object: random search, then local refinement, over
+  // trunk lean and twist and the reaching arm's angles. The hand first comes
+  // up by bending the elbow alone (it swings up in front of the body, above
+  // the table's edge), then reaches; the free arm hangs vertically whatever
+  // the lean; neither hand nor forearm may pass through the table top on the
+  // way neutral -> lift -> at (checked at intermediate postures).
+  Reach reach_postures(int side, const Eigen::Vector3d& obj) {
     struct Range { int dof; double lo, hi; };
     const std::array<Range, 7> ranges = {{{lumbar_flex_, 0.0, 0.6},
                                           {lumbar_twist_, -0.3, 0.3},
@@ -367,18 +377,30 @@ class Generator {
                                           {sh_rot_[side], -0.3, 0.5},
                                           {elbow_[side], 0.08, 0.9},
                                           {wrist_[side], -0.4, 0.2}}};
+    const int free = 1 - side;
     auto make = [&](const std::array<double, 7>& x) {
-      Posture p = neutral_;
+      Reach r;
+      Posture& p = r.at;
+      p = neutral_;
       for (size_t i = 0; i < ranges.size(); ++i) p[ranges[i].dof] = x[i];
       p[thoracic_flex_] = 0.4 * x[0];
-      p[neck_flex_] = 0.3 + 0.3 * x[0];  // look at the object
-      return p;
+      p[neck_flex_] = 0.3 + 0.3 * x[0];                       // look at the object
+      p[sh_flex_[free]] = -(p[lumbar_flex_] + p[thoracic_flex_]);  // free arm hangs vertically
+      r.lift = neutral_;
+      r.lift[elbow_[side]] = 1.7;
+      return r;
+    };
+    auto blend = [&](const Posture& a, const Posture& b, double u) {
+      Posture c;
+      for (int d = 0; d < kHumanDofs; ++d) c[d] = a[d] + (b[d] - a[d]) * u;
+      return c;
     };
     auto cost = [&](const std::array<double, 7>& x) {
-      const Posture p = make(x);
-      const double miss = (fingertip(side, p) - obj).squaredNorm();
-      const double clear = table_clearance(side, p);
-      const double pen = clear < 0.01 ? (0.01 - clear) * (0.01 - clear) * 100.0 : 0.0;
+      const Reach r = make(x);
+      const double miss = (fingertip(side, r.at) - obj).squaredNorm();
+      double clear = 1.0;
+      for (const double u : {0.2, 0.4, 0.6, 0.8, 1.0}) clear = std::min(clear, table_clearance(blend(r.lift, r.at, u)));
+      const double pen = clear < kMinClearance ? (kMinClearance - clear) * (kMinClearance - clear) * 1000.0 : 0.0;
       return miss + pen + 0.002 * (x[0] * x[0] + x[1] * x[1]);
     };
     std::array<double, 7> best{};
@@ -410,37 +432,88 @@ class Generator {
     turn_to(facing_table_yaw());
     const int reaches = rng_.uniform() < 0.3 ? 2 : 1;
     for (int r = 0; r < reaches; ++r) {
-      const Eigen::Vector3d obj = sample_object();
-      // The arm on the object's side.
-      const Eigen::Vector2d f(std::cos(s_.yaw), std::sin(s_.yaw)), left(-f.y(), f.x());
-      const double lateral = (obj.head<2>() - Eigen::Vector2d(s_.x, s_.y)).dot(left);
-      const int side = std::abs(lateral) < 0.05 ? (rng_.uniform() < 0.5 ? 0 : 1) : (lateral > 0 ? 0 : 1);
-      posture_to(reach_posture(side, obj), rng_.uniform(0.9, 1.4));
+      // Objects until a reach keeps the hands kMinClearance above the table
+      // (its best posture may still miss the object a little); else stand.
+      bool ok = false;
+      Reach p;
+      for (int tries = 0; tries < 5 && !ok; ++tries) {
+        const Eigen::Vector3d obj = sample_object();
+        // The arm on the object's side.
+        const Eigen::Vector2d f(std::cos(s_.yaw), std::sin(s_.yaw)), left(-f.y(), f.x());
+        const double lateral = (obj.head<2>() - Eigen::Vector2d(s_.x, s_.y)).dot(left);
+        const int side = std::abs(lateral) < 0.05 ? (rng_.uniform() < 0.5 ? 0 : 1) : (lateral > 0 ? 0 : 1);
+        p = reach_postures(side, obj);
+        ok = path_clearance({neutral_, p.lift, p.at}) >= kMinClearance;
+      }
+      if (!ok) {
+        hold(rng_.uniform(0.5, 1.5));
+        continue;
+      }
+      posture_to(p.lift, rng_.uniform(0.6, 0.9));
+      posture_to(p.at, rng_.uniform(0.7, 1.1));
       hold(rng_.uniform(0.3, 1.2));
+      posture_to(p.lift, rng_.uniform(0.7, 1.1));
+      posture_to(neutral_, rng_.uniform(0.6, 0.9));
     }
-    posture_to(neutral_, rng_.uniform(0.8, 1.3));
+  }
+
+  // Smallest table clearance of forearms and hands along the joint-space
+  // path through the postures (samples every 1/8 of each leg).
+  double path_clearance(const std::vector<Posture>& path) const {
+    double clear = 1.0;
+    for (size_t i = 0; i + 1 < path.size(); ++i)
+      for (int k = 1; k <= 8; ++k) {
+        Posture p;
+        for (int d = 0; d < kHumanDofs; ++d) p[d] = path[i][d] + (path[i + 1][d] - path[i][d]) * (k / 8.0);
+        clear = std::min(clear, table_clearance(p));
+      }
+    return clear;
   }
 
   void phone() {
-    if (rng_.uniform() < 0.5) turn_to(s_.yaw + rng_.uniform(-kPi / 2, kPi / 2));
-    const int side = rng_.uniform() < 0.5 ? 0 : 1;
-    Posture p = neutral_;
-    p[sh_flex_[side]] = rng_.uniform(0.2, 0.5);
-    p[sh_rot_[side]] = rng_.uniform(0.3, 0.6);
-    p[elbow_[side]] = rng_.uniform(1.5, 1.9);
-    p[wrist_[side]] = rng_.uniform(-0.4, 0.0);
-    p[neck_flex_] = rng_.uniform(0.4, 0.7);
-    p[head_flex_] = rng_.uniform(0.1, 0.3);
-    p[thoracic_flex_] = rng_.uniform(0.0, 0.1);
-    posture_to(p, rng_.uniform(1.0, 1.5));
+    // Phone postures (hand up by the elbow first, then the rest) until one
+    // keeps the hands kMinClearance above the table; else just stand.
+    Posture p, lift;
+    bool ok = false;
+    const double yaw0 = s_.yaw;
+    double yaw = yaw0;
+    for (int tries = 0; tries < 8 && !ok; ++tries) {
+      yaw = rng_.uniform() < 0.5 ? yaw0 + rng_.uniform(-kPi / 2, kPi / 2) : yaw0;
+      const int side = rng_.uniform() < 0.5 ? 0 : 1;
+      p = neutral_;
+      p[sh_flex_[side]] = rng_.uniform(0.2, 0.5);
+      p[sh_rot_[side]] = rng_.uniform(0.3, 0.6);
+      p[elbow_[side]] = rng_.uniform(1.5, 1.9);
+      p[wrist_[side]] = rng_.uniform(-0.4, 0.0);
+      p[neck_flex_] = rng_.uniform(0.4, 0.7);
+      p[head_flex_] = rng_.uniform(0.1, 0.3);
+      p[thoracic_flex_] = rng_.uniform(0.0, 0.1);
+      lift = neutral_;
+      lift[elbow_[side]] = p[elbow_[side]];
+      s_.yaw = yaw;  // the clearance is checked where the human will face
+      ok = path_clearance({neutral_, lift, p}) >= kMinClearance;
+      s_.yaw = yaw0;
+    }
+    if (!ok) {
+      hold(rng_.uniform(1.0, 3.0));
+      return;
+    }
+    turn_to(yaw);
+    posture_to(lift, rng_.uniform(0.6, 0.9));
+    posture_to(p, rng_.uniform(0.6, 1.0));
     const double T = rng_.uniform(3.0, 8.0), amp = rng_.uniform(0.05, 0.12), f = rng_.uniform(0.1, 0.25);
     const int neck = neck_twist_;
     hold(T, [=](double t, Posture& q) {
       const double w = std::sin(kPi * t / T);
       q[neck] += amp * w * w * std::sin(2.0 * kPi * f * t);  // glances around, C2 at both ends
     });
-    posture_to(neutral_, rng_.uniform(1.0, 1.5));
+    posture_to(lift, rng_.uniform(0.6, 1.0));
+    posture_to(neutral_, rng_.uniform(0.6, 0.9));
   }
+
+  // Hands and forearms stay this far above the table top along every planned
+  // posture path (the idle sway then moves them by about 1 cm at most).
+  static constexpr double kMinClearance = 0.03;
 
   const HumanModel& m_;
   HumanMotionConfig c_;
@@ -451,6 +524,7 @@ class Generator {
   std::array<Eigen::Vector2d, 4> corners_;
   double leg_start_[3] = {0, 0, 0};
   double path_len_ = 0;
+  std::vector<int> clearance_caps_;  // forearms and hands
   int hip_[2], knee_[2], sh_flex_[2], sh_abd_[2], sh_rot_[2], elbow_[2], wrist_[2], tip_[2];
   int pelvis_twist_, pelvis_lateral_, lumbar_flex_, lumbar_twist_, thoracic_flex_, thoracic_twist_, neck_flex_,
       neck_twist_, head_flex_;
