@@ -23,20 +23,20 @@ h1 { font-size: 16px; font-weight: normal; }
 #status { font-family: monospace; font-size: 13px; white-space: pre; }
 .legend span { display: inline-block; margin-right: 14px; font-size: 12px; }
 .legend i { display: inline-block; width: 14px; height: 10px; margin-right: 4px; vertical-align: middle; }
-.obstacle { fill: #d8c9a8; stroke: #a68a5b; stroke-width: 0.004; }
-.body { fill: #ced4da; stroke: #868e96; stroke-width: 0.004; }
+.obstacle { fill: #d8c9a8; stroke: #a68a5b; stroke-width: 1; vector-effect: non-scaling-stroke; }
+.body { fill: #ced4da; stroke: #868e96; stroke-width: 1; vector-effect: non-scaling-stroke; }
 .wall { fill: #868e96; }
-.goal-region { fill: none; stroke: #e03131; stroke-width: 0.006; stroke-dasharray: 0.03 0.02; opacity: 0.6; }
+.goal-region { fill: none; stroke: #e03131; stroke-width: 1.2; stroke-dasharray: 6 4; opacity: 0.6; vector-effect: non-scaling-stroke; }
 .link { stroke: #4a6fa5; stroke-linecap: round; opacity: 0.85; }
 .human { stroke: #e8590c; stroke-linecap: round; opacity: 0.5; }
 .poi { fill: #2b8a3e; fill-opacity: 0.45; }
-.margin { fill: none; stroke: #2b8a3e; stroke-width: 0.004; stroke-dasharray: 0.012 0.008; }
-.tiago { fill: #4a6fa5; fill-opacity: 0.55; stroke: #1c3d6e; stroke-width: 0.02; }
-.fetch { fill: #e8590c; fill-opacity: 0.55; stroke: #a33e05; stroke-width: 0.02; }
-.heading { stroke: #222; stroke-width: 0.03; }
-.goal { stroke: #e03131; stroke-width: 0.012; }
-.axis { stroke: #7048e8; stroke-width: 0.012; }
-.floor { stroke: #495057; stroke-width: 0.01; }
+.margin { fill: none; stroke: #2b8a3e; stroke-width: 0.8; stroke-dasharray: 3 2; vector-effect: non-scaling-stroke; }
+.tiago { fill: #4a6fa5; fill-opacity: 0.55; stroke: #1c3d6e; stroke-width: 1.5; vector-effect: non-scaling-stroke; }
+.fetch { fill: #e8590c; fill-opacity: 0.55; stroke: #a33e05; stroke-width: 1.5; vector-effect: non-scaling-stroke; }
+.heading { stroke: #222; stroke-width: 2; vector-effect: non-scaling-stroke; }
+.goal { stroke: #e03131; stroke-width: 2.5; vector-effect: non-scaling-stroke; }
+.axis { stroke: #7048e8; stroke-width: 2.5; vector-effect: non-scaling-stroke; }
+.floor { stroke: #495057; stroke-width: 1.5; vector-effect: non-scaling-stroke; }
 .cursor { stroke: #1c1c1c; stroke-width: 1; }
 )CSS";
 
