@@ -216,14 +216,19 @@ class AtacomVectorEnv(_VectorEnvBase):
         a = as_float64(actions, "actions", shape=(self.num_envs, self.act_dim), ndim=2)
         next_step = self._mode is AutoresetMode.NEXT_STEP
         pending = None
-        self._env.step(a)
         if next_step and self._pending.any():
             # Gymnasium's next-step autoreset: the envs that ended last step
             # start a new episode now, with reward 0 and their action ignored.
-            # The batch steps all envs, so those envs are reset after the step
-            # (the C++ autoreset's episode, stepped once, is discarded).
+            # The batch steps all envs, so those envs take a zero action (the
+            # user's never reaches them) and are reset after the step: the
+            # episode the C++ same-step autoreset had started is discarded.
             pending = self._pending.copy()
+            a = a.copy()  # never write into the caller's array
+            a[pending] = 0.0
+            self._env.step(a)
             self._env.reset(pending)
+        else:
+            self._env.step(a)
         self._fresh = False
         done = np.logical_or(self._terminated, self._truncated)
 
