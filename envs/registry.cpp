@@ -69,7 +69,7 @@ nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::j
 }
 
 nlohmann::json resolve_env_config(const std::string& name, const nlohmann::json& overrides) {
-  return merge_config_strict(env_entry(name).default_config(), overrides, "");
+  return merge_config_strict(env_entry(name).default_config(), overrides, "env");
 }
 
 std::unique_ptr<BatchEnv> make_env(const EnvRequest& request) {

@@ -89,6 +89,6 @@ TEST_CASE("mlp: config JSON round trip and strict parsing", "[mlp]") {
   REQUIRE(back.activation == c.activation);
   REQUIRE_THROWS_WITH((nlohmann::json{{"hiden", {3}}}.get<MlpConfig>()), Catch::Contains("mlp.hiden"));
   REQUIRE_THROWS_WITH((nlohmann::json{{"activation", "gelu"}}.get<MlpConfig>()), Catch::Contains("gelu"));
-  REQUIRE_THROWS_WITH((nlohmann::json{{"hidden", {0}}}.get<MlpConfig>()), Catch::Contains("widths"));
-  REQUIRE_THROWS_WITH((nlohmann::json{{"hidden", 3}}.get<MlpConfig>()), Catch::Contains("wrong type"));
+  REQUIRE_THROWS_WITH((nlohmann::json{{"hidden", {0}}}.get<MlpConfig>()), Catch::Contains("'mlp.hidden[0]' is 0, must be an integer in [1, 8192]"));
+  REQUIRE_THROWS_WITH((nlohmann::json{{"hidden", 3}}.get<MlpConfig>()), Catch::Contains("'mlp.hidden' must be a list of 1 to 16 integers"));
 }

@@ -104,10 +104,10 @@ TEST_CASE("nav env: config strict JSON round trip and validation", "[nav_env]") 
 
   nlohmann::json bad = j;
   bad["room"]["z"] = 1.0;
-  REQUIRE_THROWS_WITH(from_json(bad, c), Catch::Contains("unknown config key 'nav.room.z'"));
+  REQUIRE_THROWS_WITH(from_json(bad, c), Catch::Contains("unknown config key 'env.room.z'"));
   bad = j;
   bad["tiago"].erase("radius");
-  REQUIRE_THROWS_WITH(from_json(bad, c), Catch::Contains("missing config key 'nav.tiago.radius'"));
+  REQUIRE_THROWS_WITH(from_json(bad, c), Catch::Contains("missing config key 'env.tiago.radius'"));
   bad = j;
   bad["horizon"] = 2.5;
   REQUIRE_THROWS_WITH(from_json(bad, c), Catch::Contains("horizon"));

@@ -10,6 +10,7 @@
 
 #include "src/core/binary_io.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 #include "atacom/parallel.hpp"
 
 namespace atacom {
@@ -38,17 +39,17 @@ void to_json(nlohmann::json& j, const AdamConfig& c) {
   j = nlohmann::json{{"beta1", c.beta1}, {"beta2", c.beta2}, {"eps", c.eps}};
 }
 
-void from_json(const nlohmann::json& j, AdamConfig& c) {
-  ConfigReader r(j, "adam");
-  c = default_adam_config();
-  r.get("beta1", c.beta1);
-  r.get("beta2", c.beta2);
-  r.get("eps", c.eps);
+AdamConfig read_adam_config(const nlohmann::json& j, const std::string& section) {
+  ConfigReader r(j, section);
+  AdamConfig c = default_adam_config();
+  r.get("beta1", c.beta1, range::closed_open(0.0, 1.0));
+  r.get("beta2", c.beta2, range::closed_open(0.0, 1.0));
+  r.get("eps", c.eps, range::positive());
   r.finish();
-  if (!(c.beta1 >= 0 && c.beta1 < 1) || !(c.beta2 >= 0 && c.beta2 < 1))
-    throw std::invalid_argument("adam.beta1 and adam.beta2 must be in [0, 1)");
-  if (!(c.eps > 0)) throw std::invalid_argument("adam.eps must be > 0");
+  return c;
 }
+
+void from_json(const nlohmann::json& j, AdamConfig& c) { c = read_adam_config(j, "adam"); }
 
 template <class T>
 void Adam<T>::step(T* p, const T* g, double lr) {

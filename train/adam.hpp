@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <iosfwd>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json_fwd.hpp>
@@ -20,6 +21,8 @@ struct AdamConfig {
 AdamConfig default_adam_config();
 void to_json(nlohmann::json& j, const AdamConfig& c);
 void from_json(const nlohmann::json& j, AdamConfig& c);  // unknown keys rejected
+// The same with the section's name for messages ("sac.adam").
+AdamConfig read_adam_config(const nlohmann::json& j, const std::string& section);
 
 template <class T>
 class Adam {

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -46,18 +47,19 @@ void to_json(nlohmann::json& j, const MlpConfig& c) {
   j = nlohmann::json{{"hidden", c.hidden}, {"activation", activation_name(c.activation)}};
 }
 
-void from_json(const nlohmann::json& j, MlpConfig& c) {
-  ConfigReader r(j, "mlp");
-  c = default_mlp_config();
-  r.get("hidden", c.hidden);
+MlpConfig read_mlp_config(const nlohmann::json& j, const std::string& section) {
+  ConfigReader r(j, section);
+  MlpConfig c = default_mlp_config();
+  // Hidden layer widths: at least one layer (an empty list is a linear map, which SAC cannot learn with).
+  r.get("hidden", c.hidden, range::closed(1, limits::kMaxMlpWidth), 1, size_t(limits::kMaxMlpLayers));
   std::string act = activation_name(c.activation);
   r.get("activation", act);
   c.activation = parse_activation(act);
   r.finish();
-  if (c.hidden.empty()) throw std::invalid_argument("mlp.hidden must list at least one layer width");
-  for (int h : c.hidden)
-    if (h < 1 || h > 65536) throw std::invalid_argument("mlp.hidden widths must be in [1, 65536]");
+  return c;
 }
+
+void from_json(const nlohmann::json& j, MlpConfig& c) { c = read_mlp_config(j, "mlp"); }
 
 template <class T>
 Mlp<T>::Mlp(int in, int out, const MlpConfig& cfg, int ensemble)
@@ -75,6 +77,10 @@ Mlp<T>::Mlp(int in, int out, const MlpConfig& cfg, int ensemble)
     layers_.push_back(l);
     prev = w;
   }
+  if (off > size_t(limits::kMaxMlpParams))
+    throw std::invalid_argument("network of " + std::to_string(off) + " parameters (" + std::to_string(in) + " inputs, " +
+                                std::to_string(out) + " outputs, x" + std::to_string(ensemble) +
+                                ") is larger than the limit of 2^27: reduce the hidden widths");
   params_.assign(off, T(0));
   grads_.assign(off, T(0));
 }

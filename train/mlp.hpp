@@ -31,6 +31,9 @@ struct MlpConfig {
 MlpConfig default_mlp_config();
 void to_json(nlohmann::json& j, const MlpConfig& c);
 void from_json(const nlohmann::json& j, MlpConfig& c);  // unknown keys rejected
+// The same with the section's name for messages ("sac.actor"): widths in
+// [1, limits::kMaxMlpWidth], 1 to limits::kMaxMlpLayers layers.
+MlpConfig read_mlp_config(const nlohmann::json& j, const std::string& section);
 
 template <class T>
 class Mlp {

@@ -9,6 +9,7 @@
 
 #include "src/core/binary_io.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 #include "atacom/parallel.hpp"
 
 #include <tbb/parallel_invoke.h>
@@ -53,32 +54,32 @@ void to_json(nlohmann::json& j, const SacConfig& c) {
 void from_json(const nlohmann::json& j, SacConfig& c) {
   ConfigReader r(j, "sac");
   c = default_sac_config();
-  if (const auto* s = r.sub("actor")) c.actor = s->get<MlpConfig>();
-  if (const auto* s = r.sub("critic")) c.critic = s->get<MlpConfig>();
-  r.get("batch_size", c.batch_size);
-  r.get("gamma", c.gamma);
-  r.get("tau", c.tau);
-  r.get("lr_actor", c.lr_actor);
-  r.get("lr_critic", c.lr_critic);
-  r.get("lr_alpha", c.lr_alpha);
-  r.get("init_alpha", c.init_alpha);
+  if (const auto* s = r.sub("actor")) c.actor = read_mlp_config(*s, r.path("actor"));
+  if (const auto* s = r.sub("critic")) c.critic = read_mlp_config(*s, r.path("critic"));
+  r.get("batch_size", c.batch_size, range::closed(1, limits::kMaxBatchSize));
+  r.get("gamma", c.gamma, range::closed(0.0, 1.0));
+  r.get("tau", c.tau, range::open_closed(0.0, 1.0));
+  r.get("lr_actor", c.lr_actor, range::non_negative());
+  r.get("lr_critic", c.lr_critic, range::non_negative());
+  r.get("lr_alpha", c.lr_alpha, range::non_negative());
+  r.get("init_alpha", c.init_alpha, range::positive());
   if (const auto* s = r.sub("target_entropy")) {
     if (s->is_null()) c.target_entropy = std::nullopt;
-    else if (s->is_number()) c.target_entropy = s->get<double>();
+    else if (s->is_number()) c.target_entropy = checked_number(*s, r.name("target_entropy"), range::finite());
     else throw std::invalid_argument("config key 'sac.target_entropy' must be a number or null (-act_dim)");
   }
-  r.get("log_std_min", c.log_std_min);
-  r.get("log_std_max", c.log_std_max);
-  r.get("replay_capacity", c.replay_capacity);
-  r.get("initial_replay", c.initial_replay);
-  r.get("warmup", c.warmup);
-  r.get("updates_per_step", c.updates_per_step);
+  r.get("log_std_min", c.log_std_min, range::closed(-100.0, 100.0));
+  r.get("log_std_max", c.log_std_max, range::closed(-100.0, 100.0));
+  r.get("replay_capacity", c.replay_capacity, range::closed<int64_t>(1, limits::kMaxReplayCapacity));
+  r.get("initial_replay", c.initial_replay, range::closed<int64_t>(0, limits::kMaxSteps));
+  r.get("warmup", c.warmup, range::closed<int64_t>(0, limits::kMaxSteps));
+  r.get("updates_per_step", c.updates_per_step, range::closed(0.0, 1000.0));
   r.get("obs_norm", c.obs_norm);
-  r.get("grad_clip", c.grad_clip);
-  if (const auto* s = r.sub("adam")) c.adam = s->get<AdamConfig>();
+  r.get("grad_clip", c.grad_clip, range::non_negative());
+  if (const auto* s = r.sub("adam")) c.adam = read_adam_config(*s, r.path("adam"));
   r.finish();
   auto bad = [](const std::string& what) { throw std::invalid_argument("config: sac." + what); };
-  if (c.batch_size < 1 || c.batch_size > (1 << 20)) bad("batch_size must be in [1, 2^20]");
+  if (c.batch_size < 1 || c.batch_size > limits::kMaxBatchSize) bad("batch_size must be in [1, 2^16]");
   if (!(c.gamma >= 0 && c.gamma <= 1)) bad("gamma must be in [0, 1]");
   if (!(c.tau > 0 && c.tau <= 1)) bad("tau must be in (0, 1]");
   if (!(c.lr_actor >= 0 && std::isfinite(c.lr_actor))) bad("lr_actor must be >= 0");

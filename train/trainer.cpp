@@ -16,6 +16,7 @@
 #include "src/core/config_json.hpp"
 #include "atacom/env_registry.hpp"
 #include "src/core/fs_util.hpp"
+#include "src/core/limits.hpp"
 #include "train/replay_buffer.hpp"
 #include "src/core/svg.hpp"
 
@@ -36,13 +37,13 @@ void from_json(const nlohmann::json& j, TrainConfig& c) {
   ConfigReader r(j, "train");
   r.get("env", c.env);
   r.get("algo", c.algo);
-  r.get("seed", c.seed);
-  r.get("steps", c.steps);
-  r.get("num_envs", c.num_envs);
-  r.get("eval_every", c.eval_every);
-  r.get("eval_episodes", c.eval_episodes);
+  r.get("seed", c.seed, range::at_least<int64_t>(0));
+  r.get("steps", c.steps, range::closed<int64_t>(1, limits::kMaxSteps));
+  r.get("num_envs", c.num_envs, range::closed(1, limits::kMaxEnvs));
+  r.get("eval_every", c.eval_every, range::closed<int64_t>(1, limits::kMaxSteps));
+  r.get("eval_episodes", c.eval_episodes, range::closed(1, limits::kMaxEvalEpisodes));
   r.get("eval_deterministic", c.eval_deterministic);
-  r.get("checkpoint_every", c.checkpoint_every);
+  r.get("checkpoint_every", c.checkpoint_every, range::closed<int64_t>(0, limits::kMaxSteps));
   r.finish();
 }
 
@@ -51,9 +52,9 @@ void validate(const TrainConfig& c) {
   auto bad = [](const std::string& what) { throw std::invalid_argument("config: train." + what); };
   if (c.algo != "sac" && c.algo != "atacom-sac") bad("algo must be 'sac' or 'atacom-sac', got '" + c.algo + "'");
   if (c.seed < 0) bad("seed must be >= 0");
-  if (c.steps < 1) bad("steps must be >= 1");
+  if (c.steps < 1 || c.steps > limits::kMaxSteps) bad("steps must be in [1, 10^12]");
   if (c.num_envs < 1 || c.num_envs > (1 << 20)) bad("num_envs must be in [1, 2^20]");
-  if (c.eval_every < 1) bad("eval_every must be >= 1");
+  if (c.eval_every < 1 || c.eval_every > limits::kMaxSteps) bad("eval_every must be in [1, 10^12]");
   if (c.eval_episodes < 1 || c.eval_episodes > 100000) bad("eval_episodes must be in [1, 100000]");
   if (c.checkpoint_every < 0) bad("checkpoint_every must be >= 0");
   env_entry(c.env);  // unknown env names fail here, listing the known ones
@@ -680,6 +681,7 @@ TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts) {
   if (nonempty && !opts.resume)
     throw std::invalid_argument("output directory '" + opts.out_dir +
                                 "' is not empty; pass --resume to continue that run or choose a new directory");
+  remove_stale_temp_files(opts.out_dir);  // temp files a killed earlier process of this run left behind
   Run run(cfg, opts);  // builds envs and agent: config errors surface here, before any file is written
   return run.go();
 }

@@ -1,4 +1,5 @@
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 #include "envs/arm/arm_env.hpp"
 
 #include <algorithm>
@@ -56,13 +57,14 @@ json group_json(const ArmRowGroup& g) {
   return {{"margin", g.margin}, {"beta", g.beta}, {"slack_tol", g.slack_tol}, {"tolerance", g.tolerance}};
 }
 
-ArmRowGroup read_group(const json& j, size_t rows, const std::string& what) {
-  require_exact_keys(j, {"margin", "beta", "slack_tol", "tolerance"}, what);
+ArmRowGroup read_group(const json& j, size_t rows, const std::string& section) {
+  ConfigReader r(j, section);
   ArmRowGroup g;
-  g.margin = num_array(j.at("margin"), rows, what + ".margin");
-  g.beta = num_array(j.at("beta"), rows, what + ".beta");
-  g.slack_tol = num(j.at("slack_tol"), what + ".slack_tol");
-  g.tolerance = num_array(j.at("tolerance"), rows, what + ".tolerance");
+  g.margin = num_array(r.at("margin"), rows, r.path("margin"));
+  g.beta = num_array(r.at("beta"), rows, r.path("beta"));
+  g.slack_tol = r.number("slack_tol", range::open(0.0, 1.0));
+  g.tolerance = num_array(r.at("tolerance"), rows, r.path("tolerance"));
+  r.finish();
   return g;
 }
 
@@ -117,35 +119,35 @@ ArmEnvConfig default_arm_env_config(ArmTask task) {
 }
 
 void ArmEnvConfig::validate() const {
-  if (!(dt > 0.0 && dt < 1.0)) throw std::invalid_argument("dt must be in (0, 1) s");
-  if (horizon < 1) throw std::invalid_argument("horizon must be >= 1");
-  if (!(velocity_scale > 0.0 && velocity_scale <= 1.0)) throw std::invalid_argument("velocity_scale must be in (0, 1]");
-  if (!(torso_lift >= 0.0 && torso_lift <= 0.35)) throw std::invalid_argument("torso_lift must be in [0, 0.35] m");
+  if (!(dt > 0.0 && dt < 1.0)) throw std::invalid_argument("config: env.dt must be in (0, 1) s");
+  if (horizon < 1) throw std::invalid_argument("config: env.horizon must be >= 1");
+  if (!(velocity_scale > 0.0 && velocity_scale <= 1.0)) throw std::invalid_argument("config: env.velocity_scale must be in (0, 1]");
+  if (!(torso_lift >= 0.0 && torso_lift <= 0.35)) throw std::invalid_argument("config: env.torso_lift must be in [0, 0.35] m");
   auto check_group = [](const ArmRowGroup& g, size_t rows, const std::string& what, bool margin_is_height) {
     if (g.margin.size() != rows || g.beta.size() != rows || g.tolerance.size() != rows)
-      throw std::invalid_argument(what + ": margin, beta and tolerance need " + std::to_string(rows) + " entries");
+      throw std::invalid_argument("config: env." + what + ": margin, beta and tolerance need " + std::to_string(rows) + " entries");
     for (size_t i = 0; i < rows; ++i) {
-      if (!(g.beta[i] > 0.0) || !std::isfinite(g.beta[i])) throw std::invalid_argument(what + ".beta must be > 0");
-      if (!(g.tolerance[i] >= 0.0)) throw std::invalid_argument(what + ".tolerance must be >= 0");
+      if (!(g.beta[i] > 0.0) || !std::isfinite(g.beta[i])) throw std::invalid_argument("config: env." + what + ".beta must be > 0");
+      if (!(g.tolerance[i] >= 0.0)) throw std::invalid_argument("config: env." + what + ".tolerance must be >= 0");
       if (!margin_is_height && !(g.margin[i] >= g.tolerance[i]))
-        throw std::invalid_argument(what + ".margin must be >= " + what +
+        throw std::invalid_argument("config: env." + what + ".margin must be >= env." + what +
                                     ".tolerance, so that a row within tolerance still keeps the margin's guarantee");
     }
-    if (!(g.slack_tol > 0.0 && g.slack_tol < 1.0)) throw std::invalid_argument(what + ".slack_tol must be in (0, 1)");
+    if (!(g.slack_tol > 0.0 && g.slack_tol < 1.0)) throw std::invalid_argument("config: env." + what + ".slack_tol must be in (0, 1)");
   };
   check_group(joint, 2 * kArmJoints, "constraints.joint", false);
   check_group(obstacle, kArmPoi, "constraints.obstacle", false);
   check_group(body, kArmPoi, "constraints.body", false);
   check_group(ground, 2, "constraints.ground", true);
   for (int p : ground_poi)
-    if (p < 0 || p >= kArmPoi) throw std::invalid_argument("ground_poi entries must be PoI indices 0..8");
+    if (p < 0 || p >= kArmPoi) throw std::invalid_argument("config: env.constraints.ground_poi entries must be PoI indices 0..8");
   if (!(reward.desired_approach.norm() > 0.5 && reward.desired_approach.norm() < 2.0))
-    throw std::invalid_argument("reward.desired_approach must be a unit vector");
-  if (!(init_margin >= 0.0)) throw std::invalid_argument("init_margin must be >= 0");
-  if (sample_batches < 1) throw std::invalid_argument("sample_batches must be >= 1");
-  if (!(goal_min_distance >= 0.0)) throw std::invalid_argument("goal_min_distance must be >= 0");
-  if (goal_library_size < 1) throw std::invalid_argument("goal_library_size must be >= 1");
-  if (!(goal_jitter >= 0.0 && goal_jitter < 1.0)) throw std::invalid_argument("goal_jitter must be in [0, 1) rad");
+    throw std::invalid_argument("config: env.reward.desired_approach must be a unit vector");
+  if (!(init_margin >= 0.0)) throw std::invalid_argument("config: env.init_margin must be >= 0");
+  if (sample_batches < 1) throw std::invalid_argument("config: env.sample_batches must be >= 1");
+  if (!(goal_min_distance >= 0.0)) throw std::invalid_argument("config: env.goal_min_distance must be >= 0");
+  if (goal_library_size < 1) throw std::invalid_argument("config: env.goal_library_size must be >= 1");
+  if (!(goal_jitter >= 0.0 && goal_jitter < 1.0)) throw std::invalid_argument("config: env.goal_jitter must be in [0, 1) rad");
 }
 
 void to_json(json& j, const ArmEnvConfig& c) {
@@ -178,49 +180,49 @@ void to_json(json& j, const ArmEnvConfig& c) {
 }
 
 void from_json(const json& j, ArmEnvConfig& c) {
-  require_exact_keys(j, {"torso_lift", "dt", "horizon", "velocity_scale", "scene", "reward", "constraints", "init_margin",
-                 "sample_batches", "goal_min_distance", "goal_library_size", "goal_library_seed", "goal_jitter",
-                 "home"},
-             "arm env config");
-  c.torso_lift = num(j.at("torso_lift"), "torso_lift");
-  c.dt = num(j.at("dt"), "dt");
-  if (!j.at("horizon").is_number_integer()) throw std::invalid_argument("horizon must be an integer");
-  c.horizon = j.at("horizon").get<int>();
-  c.velocity_scale = num(j.at("velocity_scale"), "velocity_scale");
+  ConfigReader r(j, "env");
+  c.torso_lift = r.number("torso_lift", range::closed(0.0, 0.35));
+  c.dt = r.number("dt", range::open(0.0, 1.0));
+  c.horizon = r.integer("horizon", range::closed(1, limits::kMaxHorizon));
+  c.velocity_scale = r.number("velocity_scale", range::open_closed(0.0, 1.0));
   const ArmTask task = c.task;
-  from_json(j.at("scene"), c.scene);
+  from_json(r.at("scene"), c.scene);
   c.scene.task = task;
-  const json& r = j.at("reward");
-  require_exact_keys(r, {"rho_d", "rho_ang", "rho_a", "indicator", "terminal", "desired_approach"}, "reward");
-  c.reward.rho_d = num(r.at("rho_d"), "reward.rho_d");
-  c.reward.rho_ang = num(r.at("rho_ang"), "reward.rho_ang");
-  c.reward.rho_a = num(r.at("rho_a"), "reward.rho_a");
-  c.reward.indicator = num(r.at("indicator"), "reward.indicator");
-  c.reward.terminal = num(r.at("terminal"), "reward.terminal");
-  const auto d = num_array(r.at("desired_approach"), 3, "reward.desired_approach");
-  c.reward.desired_approach = Eigen::Vector3d(d[0], d[1], d[2]);
-  const json& k = j.at("constraints");
-  require_exact_keys(k, {"joint", "obstacle", "body", "ground", "ground_poi"}, "constraints");
-  c.joint = read_group(k.at("joint"), 2 * kArmJoints, "constraints.joint");
-  c.obstacle = read_group(k.at("obstacle"), kArmPoi, "constraints.obstacle");
-  c.body = read_group(k.at("body"), kArmPoi, "constraints.body");
-  c.ground = read_group(k.at("ground"), 2, "constraints.ground");
-  const auto gp = num_array(k.at("ground_poi"), 2, "constraints.ground_poi");
-  for (int i = 0; i < 2; ++i) {
-    if (gp[i] != std::floor(gp[i])) throw std::invalid_argument("constraints.ground_poi must hold integers");
-    c.ground_poi[i] = static_cast<int>(gp[i]);
+  {
+    ConfigReader s(r.at("reward"), r.path("reward"));
+    c.reward.rho_d = s.number("rho_d");
+    c.reward.rho_ang = s.number("rho_ang");
+    c.reward.rho_a = s.number("rho_a");
+    c.reward.indicator = s.number("indicator");
+    c.reward.terminal = s.number("terminal");
+    const auto d = num_array(s.at("desired_approach"), 3, s.path("desired_approach"));
+    c.reward.desired_approach = Eigen::Vector3d(d[0], d[1], d[2]);
+    s.finish();
   }
-  c.init_margin = num(j.at("init_margin"), "init_margin");
-  if (!j.at("sample_batches").is_number_integer()) throw std::invalid_argument("sample_batches must be an integer");
-  c.sample_batches = j.at("sample_batches").get<int>();
-  c.goal_min_distance = num(j.at("goal_min_distance"), "goal_min_distance");
-  if (!j.at("goal_library_size").is_number_integer() || !j.at("goal_library_seed").is_number_unsigned())
-    throw std::invalid_argument("goal_library_size and goal_library_seed must be non-negative integers");
-  c.goal_library_size = j.at("goal_library_size").get<int>();
-  c.goal_library_seed = j.at("goal_library_seed").get<uint64_t>();
-  c.goal_jitter = num(j.at("goal_jitter"), "goal_jitter");
-  const auto h = num_array(j.at("home"), kArmJoints, "home");
+  {
+    ConfigReader s(r.at("constraints"), r.path("constraints"));
+    c.joint = read_group(s.at("joint"), 2 * kArmJoints, s.path("joint"));
+    c.obstacle = read_group(s.at("obstacle"), kArmPoi, s.path("obstacle"));
+    c.body = read_group(s.at("body"), kArmPoi, s.path("body"));
+    c.ground = read_group(s.at("ground"), 2, s.path("ground"));
+    const json& gp = s.at("ground_poi");
+    if (!gp.is_array() || gp.size() != 2)
+      throw std::invalid_argument("config key '" + s.path("ground_poi") + "' must be a list of 2 PoI indices");
+    for (int i = 0; i < 2; ++i)
+      c.ground_poi[size_t(i)] = checked_number(gp[size_t(i)], "config key '" + s.path("ground_poi") + "[" +
+                                                                  std::to_string(i) + "]'",
+                                               range::closed(0, kArmPoi - 1));
+    s.finish();
+  }
+  c.init_margin = r.number("init_margin", range::non_negative());
+  c.sample_batches = r.integer("sample_batches", range::closed(1, 100000));
+  c.goal_min_distance = r.number("goal_min_distance", range::non_negative());
+  c.goal_library_size = r.integer("goal_library_size", range::closed(1, 1 << 20));
+  c.goal_library_seed = r.integer("goal_library_seed", range::all<uint64_t>());
+  c.goal_jitter = r.number("goal_jitter", range::closed_open(0.0, 1.0));
+  const auto h = num_array(r.at("home"), kArmJoints, r.path("home"));
   std::copy(h.begin(), h.end(), c.home.begin());
+  r.finish();
   c.validate();
 }
 

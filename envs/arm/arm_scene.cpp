@@ -107,17 +107,15 @@ void to_json(json& j, const ArmSceneConfig& c) {
 }
 
 void from_json(const json& j, ArmSceneConfig& c) {
-  require_exact_keys(j, {"position", "yaw_deg", "blend", "body_blend", "goal_region", "indicator_region"}, "scene");
-  c.position = read_vec3(j.at("position"), "scene.position");
-  if (!j.at("yaw_deg").is_number_integer()) throw std::invalid_argument("scene.yaw_deg must be an integer");
-  c.yaw_deg = j.at("yaw_deg").get<int>();
-  if (c.yaw_deg % 90 != 0) throw std::invalid_argument("scene.yaw_deg must be a multiple of 90");
-  c.blend = j.at("blend").get<double>();
-  c.body_blend = j.at("body_blend").get<double>();
-  if (!(c.blend >= 0.0 && c.blend < 0.2) || !(c.body_blend >= 0.0 && c.body_blend < 0.2))
-    throw std::invalid_argument("scene.blend and scene.body_blend must be in [0, 0.2) m");
-  c.goal_region = read_box(j.at("goal_region"), "scene.goal_region");
-  c.indicator_region = read_box(j.at("indicator_region"), "scene.indicator_region");
+  ConfigReader r(j, "env.scene");
+  c.position = read_vec3(r.at("position"), r.path("position"));
+  c.yaw_deg = r.integer("yaw_deg", range::closed(-3600, 3600));
+  if (c.yaw_deg % 90 != 0) throw std::invalid_argument("config key 'env.scene.yaw_deg' must be a multiple of 90");
+  c.blend = r.number("blend", range::closed_open(0.0, 0.2));
+  c.body_blend = r.number("body_blend", range::closed_open(0.0, 0.2));
+  c.goal_region = read_box(r.at("goal_region"), r.path("goal_region"));
+  c.indicator_region = read_box(r.at("indicator_region"), r.path("indicator_region"));
+  r.finish();
 }
 
 ArmScene build_arm_scene(const ArmSceneConfig& c, const TiagoArmModel& m) {

@@ -8,6 +8,7 @@
 #include "envs/nav/nav_env.hpp"
 #include "atacom/projector.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -20,7 +21,7 @@ NavConfig default_nav_config() {
 namespace {
 
 void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument("nav config: " + what);
+  if (!ok) throw std::invalid_argument("config: env." + what);
 }
 
 bool pos(double x) { return std::isfinite(x) && x > 0.0; }
@@ -126,10 +127,10 @@ void to_json(nlohmann::json& j, const NavConfig& c) {
 void from_json(const nlohmann::json& j, NavConfig& out) {
   using Reader = ConfigReader;
   NavConfig c;
-  Reader r(j, "nav");
-  c.dt = r.number("dt");
-  c.horizon = r.integer("horizon");
-  c.block = r.integer("block");
+  Reader r(j, "env");
+  c.dt = r.number("dt", range::open_closed(0.0, 1.0));
+  c.horizon = r.integer("horizon", range::closed(1, limits::kMaxHorizon));
+  c.block = r.integer("block", range::closed(1, limits::kMaxEnvs));
   {
     Reader s(r.at("room"), r.path("room"));
     c.room.x = s.number("x");
@@ -182,8 +183,8 @@ void from_json(const nlohmann::json& j, NavConfig& out) {
   }
   {
     Reader s(r.at("box2d"), r.path("box2d"));
-    c.box2d.velocity_iterations = s.integer("velocity_iterations");
-    c.box2d.position_iterations = s.integer("position_iterations");
+    c.box2d.velocity_iterations = s.integer("velocity_iterations", range::closed(1, 1000));
+    c.box2d.position_iterations = s.integer("position_iterations", range::closed(1, 1000));
     s.finish();
   }
   r.finish();

@@ -9,6 +9,7 @@
 
 #include "src/core/binary_io.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 #include "atacom/parallel.hpp"
 
 namespace atacom {
@@ -29,13 +30,13 @@ void to_json(nlohmann::json& j, const PendulumModel& p) {
 void from_json(const nlohmann::json& j, PendulumModel& p) {
   ConfigReader r(j, "env");
   p = default_pendulum_model();
-  r.get("g", p.g);
-  r.get("m", p.m);
-  r.get("l", p.l);
-  r.get("dt", p.dt);
-  r.get("max_speed", p.max_speed);
-  r.get("max_torque", p.max_torque);
-  r.get("horizon", p.horizon);
+  r.get("g", p.g, range::finite());
+  r.get("m", p.m, range::positive());
+  r.get("l", p.l, range::positive());
+  r.get("dt", p.dt, range::open_closed(0.0, 1.0));
+  r.get("max_speed", p.max_speed, range::positive());
+  r.get("max_torque", p.max_torque, range::positive());
+  r.get("horizon", p.horizon, range::closed(1, limits::kMaxHorizon));
   r.finish();
   auto pos = [](double v) { return v > 0 && std::isfinite(v); };
   if (!std::isfinite(p.g)) throw std::invalid_argument("config: env.g must be finite");

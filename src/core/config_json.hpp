@@ -4,18 +4,100 @@
 // keys it knows (with a type check that names the key), number() / integer() /
 // string() / at() the required ones, and finish() rejects any key that was not
 // taken. So a typo in a config file is an error, never a silent default.
+//
+// Numbers are range-checked where they are read: get(key, v, range),
+// number(key, range) and integer(key, range) reject a value outside the
+// allowed Range (src/core/value_range.hpp) with a message naming the key, the
+// value and the range ("config key 'sac.batch_size' is 4294967360, must be an
+// integer in [1, 2^20]"). An integer that does not fit the target type is
+// always an error, never wrapped or saturated, even without a range.
+//
+// Config text is parsed by parse_json_strict / read_json_file: duplicate keys
+// and absurd nesting are rejected, and no raw input byte ever reaches an
+// error message (they are escaped as \xNN).
 #pragma once
 #include <cmath>
 #include <initializer_list>
+#include <limits>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "src/core/value_range.hpp"
+
 namespace atacom {
+
+// ---------------------------------------------------------------- text
+
+// `s` made safe for an error message: printable ASCII kept, every other byte
+// written as \xNN (so invalid UTF-8 never reaches a JSON dump), cut after
+// `max_bytes` input bytes with "...".
+std::string printable_text(std::string_view s, size_t max_bytes = 200);
+
+// A JSON value for a message: its dump, cut to a readable length.
+std::string value_text(const nlohmann::json& v, size_t max_bytes = 40);
+
+// Most nesting a config or filter line may have (a deeper document is
+// rejected: printing it would recurse that deep).
+constexpr int kMaxJsonDepth = 64;
+
+// Parses JSON text, rejecting duplicate keys in any object ("duplicate key
+// 'train.steps'") and nesting deeper than kMaxJsonDepth. Throws
+// std::invalid_argument whose message starts with `what` and never holds raw
+// input bytes.
+nlohmann::json parse_json_strict(std::string_view text, const std::string& what);
+
+// Reads and parses a JSON file (at most kMaxConfigFileBytes) with
+// parse_json_strict. Clear messages for a missing file, a directory, an
+// unreadable or oversized file.
+constexpr size_t kMaxConfigFileBytes = size_t{64} << 20;
+nlohmann::json read_json_file(const std::string& path, const std::string& what = "config file");
+
+// ---------------------------------------------------------------- values
+
+// The value of `x` as T if it is a number inside `r` (integers: an integer of
+// JSON); otherwise throws std::invalid_argument "<name> is <value>, must be
+// <range>" / "<name> has type <t>, must be <range>".
+template <class T>
+T checked_number(const nlohmann::json& x, const std::string& name, const Range<T>& r) {
+  auto fail = [&](bool wrong_type) -> T {
+    throw std::invalid_argument(name + (wrong_type ? std::string(" has type ") + x.type_name()
+                                                   : " is " + value_text(x)) +
+                                ", must be " + r.describe());
+  };
+  if constexpr (std::is_floating_point_v<T>) {
+    if (!x.is_number()) return fail(true);
+    const double v = x.get<double>();
+    if (!std::isfinite(v) || !r.contains(T(v))) return fail(false);
+    return T(v);
+  } else {
+    static_assert(std::is_integral_v<T> && !std::is_same_v<T, bool>);
+    if (x.is_number_float()) return fail(false);  // 1.5, or an integer too large for 64 bits
+    if (!x.is_number()) return fail(true);
+    T v;
+    if (x.is_number_unsigned()) {
+      const uint64_t u = x.get<uint64_t>();
+      if (u > static_cast<uint64_t>(std::numeric_limits<T>::max())) return fail(false);
+      v = static_cast<T>(u);
+    } else {
+      const int64_t s = x.get<int64_t>();
+      if constexpr (std::is_unsigned_v<T>) {
+        if (s < 0) return fail(false);
+      } else {
+        if (s < int64_t(std::numeric_limits<T>::min()) || s > int64_t(std::numeric_limits<T>::max()))
+          return fail(false);
+      }
+      v = static_cast<T>(s);
+    }
+    if (!r.contains(v)) return fail(false);
+    return v;
+  }
+}
 
 // For configs whose every key is required: throws std::invalid_argument when
 // j is not an object, has a key outside `keys`, or misses one of them
@@ -38,18 +120,43 @@ class ConfigReader {
     if (!j_.is_object()) throw std::invalid_argument("config section '" + section_ + "' must be a JSON object");
   }
 
+  // Optional key. Integers must fit V (never wrapped); numbers must be finite.
   template <class V>
   void get(const char* key, V& v) {
+    if constexpr (std::is_arithmetic_v<V> && !std::is_same_v<V, bool>) {
+      get(key, v, range::all<V>());
+    } else {
+      if (!j_.contains(key)) return;
+      seen_.insert(key);
+      const nlohmann::json& x = j_.at(key);
+      try {
+        check_type(x, v);
+        v = x.get<V>();
+      } catch (const nlohmann::json::exception&) {
+        throw std::invalid_argument("config key '" + path(key) + "' has the wrong type (" + x.type_name() + ")");
+      }
+    }
+  }
+  // Optional number inside `r`.
+  template <class V, class R>
+  void get(const char* key, V& v, const Range<R>& r) {
+    static_assert(std::is_arithmetic_v<V> && std::is_same_v<V, R>, "range type must match the value type");
+    if (!j_.contains(key)) return;
+    seen_.insert(key);
+    v = checked_number<V>(j_.at(key), name(key), r);
+  }
+  // Optional list of integers, each inside `r`, with min_len..max_len entries.
+  void get(const char* key, std::vector<int>& v, const Range<int>& r, size_t min_len, size_t max_len) {
     if (!j_.contains(key)) return;
     seen_.insert(key);
     const nlohmann::json& x = j_.at(key);
-    try {
-      check_type(x, v);
-      v = x.get<V>();
-    } catch (const nlohmann::json::exception&) {
-      throw std::invalid_argument("config key '" + section_ + "." + key + "' has the wrong type (" +
-                                  x.type_name() + ")");
-    }
+    if (!x.is_array() || x.size() < min_len || x.size() > max_len)
+      throw std::invalid_argument(name(key) + " must be a list of " + std::to_string(min_len) + " to " +
+                                  std::to_string(max_len) + " integers " + r.str());
+    std::vector<int> out;
+    for (size_t i = 0; i < x.size(); ++i)
+      out.push_back(checked_number<int>(x[i], "config key '" + path(key) + "[" + std::to_string(i) + "]'", r));
+    v = std::move(out);
   }
 
   // A nested section handled by its own from_json.
@@ -65,17 +172,13 @@ class ConfigReader {
     if (!j_.contains(key)) throw std::invalid_argument("missing config key '" + path(key) + "'");
     return j_.at(key);
   }
-  double number(const std::string& key) {
-    const nlohmann::json& v = at(key);
-    if (!v.is_number()) throw std::invalid_argument(path(key) + ": expected a number");
-    const double x = v.get<double>();
-    if (!std::isfinite(x)) throw std::invalid_argument(path(key) + ": must be finite");
-    return x;
+  double number(const std::string& key, const Range<double>& r = range::finite()) {
+    return checked_number<double>(at(key), name(key), r);
   }
-  int integer(const std::string& key) {
-    const nlohmann::json& v = at(key);
-    if (!v.is_number_integer()) throw std::invalid_argument(path(key) + ": expected an integer");
-    return v.get<int>();
+  int integer(const std::string& key) { return integer<int>(key, range::all<int>()); }
+  template <class I>
+  I integer(const std::string& key, const Range<I>& r) {
+    return checked_number<I>(at(key), name(key), r);
   }
   std::string string(const std::string& key) {
     const nlohmann::json& v = at(key);
@@ -84,6 +187,8 @@ class ConfigReader {
   }
   // "section.key": the name of a nested section for its own reader.
   std::string path(const std::string& key) const { return section_ + "." + key; }
+  // "config key 'section.key'": how messages name a key.
+  std::string name(const std::string& key) const { return "config key '" + path(key) + "'"; }
 
   // Call last: rejects keys nobody asked for.
   void finish() const {
@@ -97,16 +202,13 @@ class ConfigReader {
   static void check_type(const nlohmann::json& x, const V&) {
     if constexpr (std::is_same_v<V, bool>) {
       if (!x.is_boolean()) throw_type();
-    } else if constexpr (std::is_integral_v<V>) {
-      if (!x.is_number_integer()) throw_type();
-    } else if constexpr (std::is_floating_point_v<V>) {
-      if (!x.is_number()) throw_type();
     } else if constexpr (std::is_same_v<V, std::string>) {
       if (!x.is_string()) throw_type();
     } else if constexpr (std::is_same_v<V, std::vector<int>>) {
       if (!x.is_array()) throw_type();
       for (const auto& e : x)
         if (!e.is_number_integer()) throw_type();
+      for (const auto& e : x) checked_number<int>(e, "list entry", range::all<int>());
     }
   }
   [[noreturn]] static void throw_type() { throw nlohmann::json::type_error::create(302, "type", nullptr); }

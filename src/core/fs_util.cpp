@@ -1,24 +1,69 @@
 #include "src/core/fs_util.hpp"
 
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <string_view>
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace atacom {
 
+namespace {
+
+// "<anything>.tmp.<pid>" or "<anything>.tmp.<pid>.<suffix without dots>": the pid, else 0.
+long temp_file_pid(std::string_view name) {
+  const size_t at = name.rfind(".tmp.");
+  if (at == std::string_view::npos || at == 0) return 0;
+  std::string_view rest = name.substr(at + 5);
+  const size_t dot = rest.find('.');
+  const std::string_view pid = rest.substr(0, dot);
+  if (dot != std::string_view::npos) {
+    const std::string_view suffix = rest.substr(dot + 1);
+    if (suffix.empty() || suffix.find('.') != std::string_view::npos) return 0;
+  }
+  if (pid.empty() || pid.size() > 9) return 0;
+  long v = 0;
+  for (char c : pid) {
+    if (c < '0' || c > '9') return 0;
+    v = v * 10 + (c - '0');
+  }
+  return v;
+}
+
+// This process counts as dead: the caller starts a run in `dir` and has no
+// write in flight there, so a file with its pid is a leftover of an earlier
+// process that had the same pid (pids repeat across containers and reboots).
+bool process_alive(long pid) {
+  if (pid <= 0 || pid == long(::getpid())) return false;
+  return ::kill(pid_t(pid), 0) == 0 || errno == EPERM;
+}
+
+}  // namespace
+
 void write_file_atomic(const std::string& path, const std::string& data) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  std::string tmp = path + ".tmp." + std::to_string(::getpid()) + ".XXXXXX";
+  bool created = false;
   auto fail = [&](const std::string& what) {
     const std::string err = std::strerror(errno);
-    ::unlink(tmp.c_str());
+    if (created) ::unlink(tmp.c_str());
     throw std::runtime_error("cannot write '" + path + "': " + what + ": " + err);
   };
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) fail("open");
+  // mkostemp opens with O_CREAT | O_EXCL (never follows or reuses an entry);
+  // O_NOFOLLOW is implied by O_EXCL for the last component.
+  const int fd = ::mkostemp(tmp.data(), O_CLOEXEC);
+  if (fd < 0) fail("create temp file");
+  created = true;
+  if (::fchmod(fd, 0644) != 0) {
+    ::close(fd);
+    fail("chmod temp file");
+  }
   size_t off = 0;
   while (off < data.size()) {
     const ssize_t w = ::write(fd, data.data() + off, data.size() - off);
@@ -35,6 +80,27 @@ void write_file_atomic(const std::string& path, const std::string& data) {
   }
   if (::close(fd) != 0) fail("close");
   if (::rename(tmp.c_str(), path.c_str()) != 0) fail("rename");
+}
+
+int remove_stale_temp_files(const std::string& dir) {
+  const int dfd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0) return 0;
+  DIR* d = ::fdopendir(dfd);
+  if (!d) {
+    ::close(dfd);
+    return 0;
+  }
+  int removed = 0;
+  while (const dirent* e = ::readdir(d)) {
+    const long pid = temp_file_pid(e->d_name);
+    if (pid == 0 || process_alive(pid)) continue;
+    struct stat st;
+    if (::fstatat(dfd, e->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
+    if (!S_ISREG(st.st_mode) && !S_ISLNK(st.st_mode)) continue;
+    if (::unlinkat(dfd, e->d_name, 0) == 0) ++removed;
+  }
+  ::closedir(d);
+  return removed;
 }
 
 }  // namespace atacom
