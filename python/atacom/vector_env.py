@@ -58,6 +58,21 @@ def _parse_mode(mode):
     raise ValueError(f"autoreset_mode must be 'same_step' or 'next_step', got {mode!r}")
 
 
+def _check_config_keys(env, config):
+    """Unknown keys named with the known ones at that level (C++ checks types and values)."""
+    defaults = json.loads(_core.default_env_config(env))  # an unknown env fails here, listing the known ones
+
+    def walk(base, over, path):
+        for key, value in over.items():
+            name = f"{path}.{key}"
+            if key not in base:
+                raise ValueError(f"unknown config key '{name}' (known in '{path}': {', '.join(sorted(base))})")
+            if isinstance(base[key], dict) and isinstance(value, dict):
+                walk(base[key], value, name)
+
+    walk(defaults, config, "env")
+
+
 def _readonly(a):
     a.flags.writeable = False
     return a
@@ -107,6 +122,7 @@ class AtacomVectorEnv(_VectorEnvBase):
         except (TypeError, ValueError) as e:
             raise ValueError(f"config is not representable as JSON (finite numbers, strings, lists, dicts): {e}") \
                 from None
+        _check_config_keys(env, config)
         self._mode = _parse_mode(autoreset_mode)
         self.copy = bool(copy)
         self._env = _core.BatchEnv(env, num_envs, safety, config_json)
