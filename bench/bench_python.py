@@ -4,10 +4,12 @@
 One JSON object per line, like the C++ benches:
   {"bench": "env_step_python", "env": "table", "safety": "atacom", "N": 4096, "threads": 2, "copy": false,
    "autoreset_mode": "same_step", "per_s": ..., "native_per_s": ..., "share_of_native": ...,
-   "overhead_us_per_step": ...}
+   "core_per_s": ..., "share_of_core": ..., "overhead_us_per_step": ...}
       agent env steps per second through make_vec(...).step() (float64 actions, 8 pre-drawn uniform
       sets cycled, autoreset included) next to build/bench/bench_envs for the same env, N and threads,
-      measured alternately (--pairs times each, the best kept: the machine is shared).
+      measured alternately (--pairs times each, the best kept: the machine is shared); core_per_s is
+      the same C++ step called through the bare binding (_core.BatchEnv.step) in this process, so
+      overhead_us_per_step = time per step() of the Python layer (checks, info dict, copies).
   {"bench": "project_python", "variant": "project" | "projector_inplace" | "numpy", "N": 16384, "k": 34,
    "m": 7, "n": 7, "threads": 2, "per_s": ..., "native_per_s": ..., "share_of_native": ...,
    "max_abs_diff_a": ...}
@@ -76,8 +78,16 @@ def python_env(env_name, safety, N, threads, copy, mode, repeats, round_s):
         state["i"] = (state["i"] + 1) & 7
 
     sec = best_seconds_per_call(one, repeats, round_s)
+    # The same C++ step through the bare binding (no Python layer), in this process on the same data.
+    core_step = env._env.step
+
+    def bare():
+        core_step(acts[state["i"]])
+        state["i"] = (state["i"] + 1) & 7
+
+    core_sec = best_seconds_per_call(bare, repeats, round_s)
     env.close()
-    return N / sec
+    return N / sec, N / core_sec
 
 
 def bench_envs(args):
@@ -85,20 +95,23 @@ def bench_envs(args):
         safety = SAFETY[env_name]
         for N in args.N:
             for threads in args.threads:
-                native, py = 0.0, {}
+                native, py, core = 0.0, {}, {}
                 for _ in range(args.pairs):
                     native = max(native, native_env(args.build, env_name, safety, N, threads, args.repeats,
                                                     args.round_seconds))
                     for copy in (False, True):
                         for mode in args.modes:
                             key = (copy, mode)
-                            py[key] = max(py.get(key, 0.0), python_env(env_name, safety, N, threads, copy, mode,
-                                                                      args.repeats, args.round_seconds))
+                            per_s, core_per_s = python_env(env_name, safety, N, threads, copy, mode, args.repeats,
+                                                           args.round_seconds)
+                            py[key] = max(py.get(key, 0.0), per_s)
+                            core[key] = max(core.get(key, 0.0), core_per_s)
                 for (copy, mode), per_s in py.items():
                     emit({"bench": "env_step_python", "env": env_name, "safety": safety, "N": N,
                           "threads": threads, "copy": copy, "autoreset_mode": mode, "per_s": per_s,
                           "native_per_s": native, "share_of_native": per_s / native,
-                          "overhead_us_per_step": (N / per_s - N / native) * 1e6})
+                          "core_per_s": core[(copy, mode)], "share_of_core": per_s / core[(copy, mode)],
+                          "overhead_us_per_step": (N / per_s - N / core[(copy, mode)]) * 1e6})
 
 
 # ------------------------------------------------------------------ projector
