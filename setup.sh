@@ -5,7 +5,10 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-PACKAGES=(build-essential cmake libeigen3-dev libtbb-dev libbox2d-dev nlohmann-json3-dev catch2 libcli11-dev)
+# The last four build and test the Python module (python/); python3-torch is
+# optional (only python/examples/sac_torch.py uses it) and not installed here.
+PACKAGES=(build-essential cmake libeigen3-dev libtbb-dev libbox2d-dev nlohmann-json3-dev catch2 libcli11-dev
+          pybind11-dev python3-dev python3-numpy python3-pytest)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -842,6 +842,16 @@ void check_batch(const ProjectorModel& mod, const ProjectorBatch& B) {
   if (!ok) throw std::invalid_argument("projector batch: array sizes do not match the model (use ProjectorBatch(model, N))");
 }
 
+// The calling thread's scratch, behind a call that is never inlined: the
+// kernels then hold a plain reference, instead of the compiler re-deriving the
+// thread-local address at every use (a __tls_get_addr call each time in the
+// position-independent build that the Python module links).
+template <class Scratch>
+[[gnu::noinline]] Scratch& thread_scratch() {
+  thread_local Scratch scratch;
+  return scratch;
+}
+
 }  // namespace
 
 void project_range(const ProjectorModel& mod, ProjectorBatch& B, int begin, int end, const ProjectOptions& opt) {
@@ -851,13 +861,13 @@ void project_range(const ProjectorModel& mod, ProjectorBatch& B, int begin, int 
   // capacity); larger m takes the general path.
   const bool fast = mod.num_equality() == 0 && mod.m <= 16;
   if (fast) {
-    thread_local LaneScratch scratch;
+    LaneScratch& scratch = thread_scratch<LaneScratch>();
     scratch.setup(mod);
     LaneFn fn = lane_kernel_for(mod.m);
     if (!fn) fn = project_lanes<0>;
     for (int lo = begin; lo < end; lo += kLanes) fn(mod, B, lo, std::min(lo + kLanes, end), scratch, opt.store_basis, opt.store_slack);
   } else {
-    thread_local GeneralScratch scratch;
+    GeneralScratch& scratch = thread_scratch<GeneralScratch>();
     scratch.setup(mod);
     for (int e = begin; e < end; ++e) project_general_one(mod, B, e, scratch, opt.store_basis, opt.store_slack);
   }

@@ -8,6 +8,9 @@
 #include <cstddef>
 
 #include "envs/arm/arm_env.hpp"
+#include "envs/arm/human_model.hpp"
+#include "envs/arm/human_motion.hpp"
+#include "envs/arm/human_rows.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
 
@@ -111,5 +114,32 @@ TEST_CASE("no allocation: arm env step, resets and constraint model", "[alloc]")
     CHECK(episodes > 10);
     CHECK(allocs == 0);
   }
+#endif
+}
+
+TEST_CASE("no allocation: human motion, capsules, rows and contacts", "[alloc]") {
+#if !ATACOM_COUNT_ALLOCS
+  SUCCEED("allocation counting disabled under AddressSanitizer");
+#else
+  const HumanModel m = load_human_model();
+  const HumanMotionLibrary lib = load_default_human_motion();
+  const int N = 37, P = 9, nq = 7, items = 4;
+  HumanBatch B(N);
+  const HumanRowsConst rows = make_human_rows(std::vector<double>(P, 0.1), nq, 0.02);
+  std::vector<double> t(N), poi(static_cast<size_t>(N) * P * 3, 1.0), J(static_cast<size_t>(N) * P * 3 * nq, 0.5);
+  std::vector<double> c(static_cast<size_t>(N) * P), Jq(static_cast<size_t>(N) * P * nq), dcdt(c), dex(c);
+  std::vector<double> it(static_cast<size_t>(N) * items * 6, 0.9), radii(items, 0.05), dmin(N);
+  std::vector<uint8_t> contact(N);
+  for (int e = 0; e < N; ++e) t[static_cast<size_t>(e)] = 100.0 + 391.7 * e;
+  const HumanReplayConfig replay;
+  const long before = g_allocs.load();
+  for (int rep = 0; rep < 3; ++rep) {
+    human_motion_range(lib, replay, 1.0 / 30.0, t.data(), B, 0, N);
+    human_capsules_range(m.fk, B, 0, N);
+    human_rows_range(rows, m.fk, B, poi.data(), J.data(), c.data(), Jq.data(), dcdt.data(), dex.data(), 0, N);
+    human_contact_range(B, m.fk, it.data(), radii.data(), items, contact.data(), dmin.data(), 0, N);
+  }
+  const long allocs = g_allocs.load() - before;
+  CHECK(allocs == 0);
 #endif
 }

@@ -10,9 +10,19 @@
 
 namespace atacom {
 
+namespace {
+std::string& runtime_data_dir() {
+  static std::string dir;
+  return dir;
+}
+}  // namespace
+
+void set_data_dir(const std::string& dir) { runtime_data_dir() = dir; }
+
 std::string data_dir() {
   const char* env = std::getenv("ATACOM_DATA_DIR");
   if (env != nullptr && env[0] != '\0') return env;
+  if (!runtime_data_dir().empty()) return runtime_data_dir();
   return ATACOM_DEFAULT_DATA_DIR;
 }
 

@@ -1,0 +1,46 @@
+"""atacom: safe reinforcement learning on the tangent space of the constraint manifold.
+
+The C++ engine's batched envs as a Gymnasium-style vector env with the
+constraint vector in the open, and the ATACOM projector as a batched NumPy
+function for your own systems:
+
+    import atacom
+    env = atacom.make_vec("table", 64, seed=0, safety="atacom")
+    obs, info = env.reset()
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+
+    r = atacom.project(f, G, J_q, c, alpha)     # r.a, r.s, r.lambda_, r.status
+
+Data files (robot models) are found next to this package (data/), or in
+ATACOM_DATA_DIR when that is set.
+"""
+import json as _json
+import os as _os
+
+from . import _core
+
+_DATA = _os.path.join(_os.path.dirname(_os.path.abspath(__file__)), "data")
+if _os.path.isdir(_DATA):
+    _core.set_data_dir(_DATA)
+
+from ._core import RandomStreams, data_dir, env_names, num_threads, set_num_threads  # noqa: E402
+from .projector import STATUS_FLAGS, Projector, ProjectResult, project, status_flags  # noqa: E402
+from .spaces import HAVE_GYMNASIUM, Box  # noqa: E402
+from .vector_env import AtacomVectorEnv, AutoresetMode, make_vec  # noqa: E402
+
+
+def default_config(env):
+    """The env's default config (what make_vec's config overrides)."""
+    return _json.loads(_core.default_env_config(env))
+
+
+def safety_layers():
+    """Names make_vec's safety= accepts."""
+    return list(_core.safety_layer_names())
+
+
+__all__ = [
+    "AtacomVectorEnv", "AutoresetMode", "Box", "HAVE_GYMNASIUM", "ProjectResult", "Projector", "RandomStreams",
+    "STATUS_FLAGS", "data_dir", "default_config", "env_names", "make_vec", "num_threads", "project",
+    "safety_layers", "set_num_threads", "status_flags",
+]

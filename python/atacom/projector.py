@@ -1,0 +1,192 @@
+"""The ATACOM projector over batches of users' own systems, from NumPy.
+
+    qdot = f(q) + G(q) a,  constraints c(q, x) <= 0,  J_q = dc/dq,  J_x = dc/dx
+
+    r = atacom.project(f, G, J_q, c, alpha)        # f (N, n), G (N, n, m), J_q (N, k, n), c (N, k), alpha (N, m)
+    a, s, lam, status = r                          # or r.a, r.s, r.lambda_, r.status, r.qdot, r["lambda"]
+
+The options and their defaults are those of `atacom filter` (README, filter
+section), and the results agree with it to 1e-12 on the same inputs:
+    slack     "softcorner" | "exponential" | "quadratic", or one per row    default "softcorner"
+    beta      number or one per row (> 0)                                   default 3
+    tol       number or one per row, in (0, 1)                              default 1e-6
+    K_c       number >= 0                                                   default 30 (1/dt at 30 Hz)
+    basis     "projected" | "smooth"                                        default "projected"
+    equality  bool or one per row                                           default False
+The model options are shared by the whole batch; every array is per env.
+Non-finite entries are not an error here (the filter rejects such a line):
+the kernel's status bits report them per env (2: NaN/Inf alpha replaced by
+0; 4: non-finite model, a = 0), as inside the envs.
+"""
+import json
+import numbers
+
+import numpy as np
+
+from . import _core
+from ._arrays import as_count, as_float64
+
+# Bits of the status array (ProjectorStatus in include/atacom/projector.hpp).
+STATUS_FLAGS = {
+    1: "bias_out_of_bounds",    # the correction alone is outside [-1, 1]^m: lambda = 0, a = b
+    2: "alpha_nonfinite",       # NaN/Inf in alpha: replaced by 0 (pure correction)
+    4: "model_nonfinite",       # NaN/Inf in f, G, c, J or xdot: a = 0 (stop)
+    8: "equality_rank_loss",    # equality rows dependent: solved in least squares
+}
+
+
+def status_flags(status):
+    """Names of the bits set in one status value (as the filter's status_flags)."""
+    status = int(status)
+    return [name for bit, name in STATUS_FLAGS.items() if status & bit]
+
+
+class ProjectResult(tuple):
+    """(a, s, lambda, status) of N projections.
+
+    Attributes a (N, m), s (N, k), lambda_ (N,), status (N,) uint32 and qdot
+    (N, n) = f + G a; r["a"], r["lambda"], ... index by the filter's keys.
+    """
+
+    def __new__(cls, out):
+        obj = super().__new__(cls, (out["a"], out["s"], out["lambda"], out["status"]))
+        obj._out = out
+        return obj
+
+    def __getitem__(self, key):
+        if isinstance(key, str):
+            return self._out[key]
+        return super().__getitem__(key)
+
+    def keys(self):
+        return self._out.keys()
+
+    a = property(lambda self: self._out["a"])
+    s = property(lambda self: self._out["s"])
+    lambda_ = property(lambda self: self._out["lambda"])
+    status = property(lambda self: self._out["status"])
+    qdot = property(lambda self: self._out["qdot"])
+
+
+def _number(value, what):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(f"'{what}' must be a number, got {type(value).__name__}")
+    value = float(value)
+    if not np.isfinite(value):
+        raise ValueError(f"'{what}' is NaN or infinite")
+    return value
+
+
+def _string(value, what):
+    if not isinstance(value, str):
+        raise TypeError(f"'{what}' must be a string, got {type(value).__name__}")
+    return value
+
+
+def _boolean(value, what):
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"'{what}' must be True or False, got {type(value).__name__}")
+    return bool(value)
+
+
+def _per_row(value, key, k, parse):
+    """A single value for every row or one per row, as the filter reads them."""
+    if isinstance(value, (str, bool, np.bool_, numbers.Number)):
+        return [parse(value, key)] * k
+    try:
+        values = list(value)
+    except TypeError:
+        raise TypeError(f"'{key}' must be a single value or one per constraint, got {type(value).__name__}") \
+            from None
+    if len(values) != k:
+        raise ValueError(f"'{key}' has {len(values)} entries, expected one per constraint ({k}) or a single value")
+    return [parse(v, f"{key}[{i}]") for i, v in enumerate(values)]
+
+
+def _model_json(n, m, k, p, slack, beta, tol, K_c, basis, equality):
+    model = {"n": n, "m": m, "k": k, "p": p}
+    if slack is not None:
+        model["slack"] = _per_row(slack, "slack", k, _string)
+    if beta is not None:
+        model["beta"] = _per_row(beta, "beta", k, _number)
+    if tol is not None:
+        model["tol"] = _per_row(tol, "tol", k, _number)
+    if equality is not None:
+        model["equality"] = _per_row(equality, "equality", k, _boolean)
+    if K_c is not None:
+        model["K_c"] = _number(K_c, "K_c")
+    if basis is not None:
+        model["basis"] = _string(basis, "basis")
+    return json.dumps(model)
+
+
+def project(f, G, J_q, c, alpha, J_x=None, xdot=None, slack=None, beta=None, tol=None, K_c=None, basis=None,
+            equality=None, parallel=True):
+    """Project N policy actions alpha onto the constraint manifold's tangent space.
+
+    f (N, n), G (N, n, m), J_q (N, k, n), c (N, k), alpha (N, m); optional
+    J_x (N, k, p) and xdot (N, p) together. Options (None = the filter's
+    default): slack, beta, tol, K_c, basis, equality (module docstring).
+    Returns ProjectResult: a (N, m) safe controls, s (N, k) slack values
+    (0 on equality rows), lambda (N,) tangential scale in [0, 1], status (N,)
+    uint32 bits (STATUS_FLAGS), qdot (N, n) = f + G a. The GIL is released
+    while the kernel runs (TBB-parallel unless parallel=False).
+    """
+    f = as_float64(f, "f", ndim=2)
+    N, n = f.shape
+    alpha = as_float64(alpha, "alpha", ndim=2)
+    c = as_float64(c, "c", ndim=2)
+    if N < 1:
+        raise ValueError("the batch is empty (f has N = 0 rows)")
+    if alpha.shape[0] != N or c.shape[0] != N:
+        raise ValueError(f"f, alpha and c must have the same number of rows N (got {N}, {alpha.shape[0]}, "
+                         f"{c.shape[0]})")
+    m, k = alpha.shape[1], c.shape[1]
+    if n < 1:
+        raise ValueError("f must not be empty (it sets n)")
+    if m < 1:
+        raise ValueError("alpha must not be empty (it sets m)")
+    G = as_float64(G, "G", shape=(N, n, m), ndim=3)
+    J_q = as_float64(J_q, "J_q", shape=(N, k, n), ndim=3)
+    if (J_x is None) != (xdot is None):
+        raise ValueError("J_x and xdot must be given together")
+    p = 0
+    if xdot is not None:
+        xdot = as_float64(xdot, "xdot", ndim=2)
+        if xdot.shape[0] != N:
+            raise ValueError(f"xdot must have N = {N} rows, got {xdot.shape[0]}")
+        p = xdot.shape[1]
+        J_x = as_float64(J_x, "J_x", shape=(N, k, p), ndim=3)
+    model = _model_json(n, m, k, p, slack, beta, tol, K_c, basis, equality)
+    out = _core.project(model, f, G, J_q, c, alpha, J_x if p else None, xdot if p else None, bool(parallel))
+    return ProjectResult(out)
+
+
+class Projector:
+    """A persistent batch of N problems: write the inputs in place, call project().
+
+    Inputs f, G, J_q, c, alpha (and J_x, xdot when p > 0) are writable float64
+    arrays of the shapes project() takes; a, s, slack_u, lambda_, status are
+    read-only outputs, overwritten by each project(). Nothing is copied or
+    allocated per call: the fastest way to run the kernel from Python.
+    """
+
+    def __init__(self, N, n, m, k, p=0, slack=None, beta=None, tol=None, K_c=None, basis=None, equality=None):
+        N = as_count(N, "N")
+        n, m = as_count(n, "n"), as_count(m, "m")
+        k, p = as_count(k, "k", 0), as_count(p, "p", 0)
+        self._core = _core.Projector(_model_json(n, m, k, p, slack, beta, tol, K_c, basis, equality), N)
+        self.N, self.n, self.m, self.k, self.p = N, n, m, k, p
+        v = self._core.views()
+        self.f, self.G, self.J_q, self.c, self.alpha = v["f"], v["G"], v["J_q"], v["c"], v["alpha"]
+        self.J_x, self.xdot = v["J_x"], v["xdot"]
+        self.a, self.s, self.slack_u, self.lambda_, self.status = v["a"], v["s"], v["slack_u"], v["lambda"], v["status"]
+
+    @property
+    def model(self):
+        """The resolved projector model (every option per row)."""
+        return json.loads(self._core.model_json)
+
+    def project(self, parallel=True):
+        self._core.project(bool(parallel))
+        return self

@@ -1,0 +1,121 @@
+"""Bad input gets a Python exception naming the problem, never a crash."""
+import numpy as np
+import pytest
+
+import atacom
+from atacom import _core
+
+
+@pytest.fixture(scope="module")
+def table():
+    return atacom.make_vec("table", 3, seed=0)
+
+
+@pytest.mark.parametrize("kwargs,exc,pattern", [
+    (dict(env="tabel"), ValueError, r"unknown env 'tabel' \(known: table, shelf, nav, pendulum"),
+    (dict(env=3), TypeError, "env must be a name"),
+    (dict(env="table", safety="atacomm"), ValueError, r"unknown safety layer 'atacomm' \(known: none, atacom"),
+    (dict(env="pendulum", safety="atacom"), ValueError, "no constraint model"),
+    (dict(env="table", config={"horizn": 10}), ValueError, r"unknown config key 'env.horizn' \(known in 'env': .*horizon"),
+    (dict(env="table", config={"reward": {"rho": 1}}), ValueError, r"'env.reward.rho' \(known in 'env.reward': .*rho_d"),
+    (dict(env="table", config={"horizon": "long"}), ValueError, "config key 'env.horizon' has type string"),
+    (dict(env="table", config={"horizon": float("nan")}), ValueError, "finite numbers"),
+    (dict(env="table", config=[1]), TypeError, "config must be a dict"),
+    (dict(env="table", num_envs=0), ValueError, "num_envs must be >= 1"),
+    (dict(env="table", num_envs=2.5), TypeError, "num_envs must be an integer"),
+    (dict(env="table", seed=-1), ValueError, r"seed must be in \[0, 2\*\*64\)"),
+    (dict(env="table", seed=2**64), ValueError, "seed must be in"),
+    (dict(env="table", seed="0"), TypeError, "seed must be an integer"),
+    (dict(env="table", autoreset_mode="disabled"), ValueError, "autoreset_mode must be 'same_step' or 'next_step'"),
+])
+def test_make_vec_errors(kwargs, exc, pattern):
+    kwargs = dict(dict(num_envs=2), **kwargs)
+    with pytest.raises(exc, match=pattern):
+        atacom.make_vec(**kwargs)
+
+
+@pytest.mark.parametrize("actions,exc,pattern", [
+    (np.zeros((3, 6)), ValueError, r"actions must have shape \(3, 7\), got \(3, 6\)"),
+    (np.zeros((7,)), ValueError, r"actions must have 2 dimensions \(3, 7\), got shape \(7,\)"),
+    (np.zeros((3, 7), dtype=np.complex128), TypeError, "actions has dtype complex128, which cannot be cast safely"),
+    (np.array([["a"] * 7] * 3), TypeError, "cannot be cast safely"),
+    (np.zeros((3, 7), dtype=object), TypeError, "dtype object"),
+    (np.zeros((3, 7), dtype=np.longdouble), TypeError, "cannot be cast safely"),
+    ([[0.0] * 7] * 2 + [[0.0] * 6], TypeError, "could not be converted|cannot be cast"),
+    (None, TypeError, "cannot be cast safely"),
+])
+def test_step_errors(table, actions, exc, pattern):
+    table.reset()
+    with pytest.raises(exc, match=pattern):
+        table.step(actions)
+    table.step(np.zeros((3, 7)))  # the env is fine afterwards
+
+
+def test_reset_errors(table):
+    with pytest.raises(ValueError, match="seed must be one integer"):
+        table.reset(seed=[1, 2, 3])
+    with pytest.raises(ValueError, match="cannot be combined"):
+        table.reset(seed=1, options={"reset_mask": np.ones(3, bool)})
+    with pytest.raises(TypeError, match="options must be a dict"):
+        table.reset(options=[1])
+    with pytest.raises(TypeError, match="booleans"):
+        table.reset(options={"reset_mask": np.array([0.5, 1, 0])})
+
+
+def test_core_rejects_what_the_python_layer_would_catch():
+    """The bindings check again, so calling _core directly cannot read out of bounds."""
+    e = _core.BatchEnv("pendulum", 2, "none", "{}")
+    with pytest.raises(ValueError, match=r"actions must have shape \(2, 1\)"):
+        e.step(np.zeros((1, 1)))
+    with pytest.raises(ValueError, match="float64"):
+        e.step(np.zeros((2, 1), np.float32))
+    with pytest.raises(ValueError, match="C-contiguous"):
+        e.step(np.zeros((2, 2))[:, :1])
+    with pytest.raises(ValueError, match="reset mask"):
+        e.reset(np.ones(5, bool))
+    with pytest.raises(RuntimeError):
+        e.load_state(b"garbage")
+    with pytest.raises(ValueError, match="num_envs must be >= 1"):
+        _core.BatchEnv("pendulum", 0, "none", "{}")
+    with pytest.raises(ValueError, match="f must have shape"):
+        _core.project('{"n": 2, "m": 2, "k": 1}', np.zeros((3, 3)), np.zeros((3, 2, 2)), np.zeros((3, 1, 2)),
+                      np.zeros((3, 1)), np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="only dense G"):
+        _core.Projector('{"n": 2, "m": 2, "k": 1, "g_form": "diagonal"}', 4)
+
+
+def prob(N=4, n=3, m=2, k=2):
+    rng = np.random.default_rng(0)
+    return dict(f=rng.standard_normal((N, n)), G=rng.standard_normal((N, n, m)), J_q=rng.standard_normal((N, k, n)),
+                c=-rng.uniform(0.1, 1, (N, k)), alpha=rng.uniform(-1, 1, (N, m)))
+
+
+@pytest.mark.parametrize("change,exc,pattern", [
+    (dict(G=np.zeros((4, 3, 3))), ValueError, r"G must have shape \(4, 3, 2\), got \(4, 3, 3\)"),
+    (dict(J_q=np.zeros((4, 2, 2))), ValueError, r"J_q must have shape \(4, 2, 3\)"),
+    (dict(c=np.zeros((5, 2))), ValueError, "same number of rows N"),
+    (dict(f=np.zeros(3)), ValueError, "f must have 2 dimensions"),
+    (dict(alpha=np.zeros((4, 2), np.complex64)), TypeError, "alpha has dtype complex64"),
+    (dict(J_x=np.zeros((4, 2, 1))), ValueError, "J_x and xdot must be given together"),
+    (dict(J_x=np.zeros((4, 2, 2)), xdot=np.zeros((4, 1))), ValueError, r"J_x must have shape \(4, 2, 1\)"),
+    (dict(slack="soft"), ValueError, r"unknown slack type 'soft' \(softcorner, exponential, quadratic\)"),
+    (dict(slack=["softcorner"]), ValueError, r"'slack' has 1 entries, expected one per constraint \(2\)"),
+    (dict(beta=-1.0), ValueError, "beta.0. must be finite and > 0"),
+    (dict(beta=float("nan")), ValueError, "'beta' is NaN or infinite"),
+    (dict(beta="3"), TypeError, "'beta' must be a number"),
+    (dict(tol=2.0), ValueError, r"tol\[0\] must be in \(0, 1\)"),
+    (dict(K_c=-1.0), ValueError, "K_c must be finite and >= 0"),
+    (dict(basis="orthonormal"), ValueError, r"unknown basis 'orthonormal' \(projected, smooth\)"),
+    (dict(equality=[1, 0]), TypeError, r"'equality\[0\]' must be True or False"),
+    (dict(equality=[True, True, True]), ValueError, "'equality' has 3 entries"),
+])
+def test_project_errors(change, exc, pattern):
+    p = prob()
+    p.update(change)
+    with pytest.raises(exc, match=pattern):
+        atacom.project(**p)
+
+
+def test_project_more_equalities_than_controls():
+    with pytest.raises(ValueError, match="more equality rows than controls"):
+        atacom.project(**prob(k=3), equality=True)

@@ -1,0 +1,40 @@
+"""The examples run (short versions) and say what they claim."""
+import importlib.util
+import os
+import subprocess
+import sys
+
+import pytest
+
+EXAMPLES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "examples")
+
+
+def run(script, *args):
+    return subprocess.run([sys.executable, os.path.join(EXAMPLES, script), *args], capture_output=True, text=True,
+                          timeout=300, env=dict(os.environ))
+
+
+def test_random_safety_check_finds_no_collision_under_atacom():
+    r = run("random_safety_check.py", "--env", "table", "nav", "--envs", "8", "--steps", "800")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "ATACOM: no collisions" in r.stdout
+    assert r.stdout.count("atacom") == 2 and r.stdout.count("none") == 2
+
+
+def test_sac_torch_example_runs_or_skips_cleanly():
+    r = run("sac_torch.py", "--steps", "240", "--warmup", "160", "--envs", "4", "--hidden", "32", "--batch", "16",
+            "--log-every", "120")
+    assert r.returncode == 0, r.stdout + r.stderr
+    if importlib.util.find_spec("torch") is None:
+        assert "skipped: PyTorch is not installed" in r.stdout
+        pytest.skip("PyTorch not installed: the example skipped cleanly")
+    assert '"train_collisions": 0' in r.stdout and '"updates": ' in r.stdout
+
+
+def test_sac_torch_example_without_torch_says_so(tmp_path):
+    (tmp_path / "torch.py").write_text("raise ImportError('no torch here')\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
+    r = subprocess.run([sys.executable, os.path.join(EXAMPLES, "sac_torch.py")], capture_output=True, text=True,
+                       timeout=60, env=env)
+    assert r.returncode == 0
+    assert "sac_torch.py skipped: PyTorch is not installed (Debian: apt-get install python3-torch)" in r.stdout

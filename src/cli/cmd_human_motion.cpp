@@ -1,0 +1,50 @@
+// atacom human-motion: regenerate the human's motion library (docs/human.md).
+#include <iostream>
+
+#include "cli/command.hpp"
+#include "envs/arm/human_model.hpp"
+#include "envs/arm/human_motion.hpp"
+
+namespace atacom::cli {
+namespace {
+
+std::string manifest_path(const std::string& bin) {
+  const size_t dot = bin.rfind('.');
+  const size_t slash = bin.rfind('/');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  return (has_ext ? bin.substr(0, dot) : bin) + ".json";
+}
+
+const RegisterCommand reg{{"human-motion",
+                           "generate the human motion library (frames FILE, manifest FILE with .json)",
+                           [](CLI::App& app) {
+                             auto seed = std::make_shared<uint64_t>(default_human_motion_config().seed);
+                             auto frames = std::make_shared<int>(default_human_motion_config().frames);
+                             auto out = std::make_shared<std::string>();
+                             app.add_option("--seed", *seed, "generator seed (the project's library: 2023)");
+                             app.add_option("--frames", *frames, "at least this many frames at 30 Hz")
+                                 ->check(CLI::Range(100, 1000000));
+                             app.add_option("--out", *out, "frames file, e.g. data/human_motion.bin")->required();
+                             return [=]() {
+                               HumanMotionConfig c = default_human_motion_config();
+                               c.seed = *seed;
+                               c.frames = *frames;
+                               const HumanModel model = load_human_model();
+                               const HumanMotionLibrary lib = generate_human_motion(model, c);
+                               const std::string manifest = manifest_path(*out);
+                               save_human_motion(lib, model, *out, manifest);
+                               std::cout << nlohmann::json{{"frames", lib.num_frames},
+                                                           {"segments", lib.segments.size()},
+                                                           {"test_begin", lib.test_begin},
+                                                           {"seed", c.seed},
+                                                           {"version", lib.version},
+                                                           {"out", *out},
+                                                           {"manifest", manifest}}
+                                                .dump()
+                                         << "\n";
+                               return 0;
+                             };
+                           }}};
+
+}  // namespace
+}  // namespace atacom::cli

@@ -1,0 +1,54 @@
+// atacom render: one episode as a self-contained HTML page (docs/render.md).
+#include <fstream>
+#include <iostream>
+
+#include "cli/command.hpp"
+#include "src/core/fs_util.hpp"
+#include "src/experiments/render.hpp"
+
+namespace atacom::cli {
+namespace {
+
+struct RenderArgs {
+  RenderConfig cfg;
+  std::string safety = "atacom", out, config_file;
+};
+
+const RegisterCommand reg{
+    {"render", "draw one episode as a self-contained HTML page (animated SVG, slider, constraint and reward plots)",
+     [](CLI::App& app) -> std::function<int()> {
+       auto a = std::make_shared<RenderArgs>();
+       app.add_option("--env", a->cfg.env, "table | shelf | nav | hri")->required();
+       app.add_option("--policy", a->cfg.policy, "random | zero")->check(CLI::IsMember({"random", "zero"}));
+       app.add_option("--safety", a->safety, "atacom | none | safelayer: the layer between policy and env");
+       app.add_option("--seed", a->cfg.seed, "seed of the env and the policy");
+       app.add_option("--config", a->config_file, "JSON file with env config overrides");
+       app.add_option("--out", a->out, "the HTML file to write")->required();
+       return [a] {
+         a->cfg.safety = parse_safety_layer(a->safety);
+         if (!a->config_file.empty()) {
+           std::ifstream in(a->config_file);
+           if (!in) throw std::runtime_error("cannot read config file '" + a->config_file + "'");
+           try {
+             a->cfg.env_config = nlohmann::json::parse(in);
+           } catch (const nlohmann::json::exception& e) {
+             throw std::runtime_error("config file '" + a->config_file + "' is not valid JSON: " + e.what());
+           }
+         }
+         const RenderResult r = render_episode(a->cfg);
+         write_file_atomic(a->out, r.html);
+         std::cout << nlohmann::json{{"out", a->out},
+                                     {"steps", r.steps},
+                                     {"return", r.episode_return},
+                                     {"collisions", r.collisions},
+                                     {"max_constraint", r.max_constraint},
+                                     {"terminated", r.terminated},
+                                     {"bytes", r.html.size()}}
+                          .dump()
+                   << "\n";
+         return 0;
+       };
+     }}};
+
+}  // namespace
+}  // namespace atacom::cli

@@ -1,0 +1,42 @@
+// `atacom render`: one episode of an env as a self-contained HTML page (no
+// server, no network): animated SVG views of the scene (top and side for the
+// arm envs, top for nav), a time slider with play/pause, and plots of the
+// constraint values and the reward over the episode with the collisions
+// marked. Users watch what the robot does before they trust a number.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "atacom/safety_layer.hpp"
+
+namespace atacom {
+
+struct RenderConfig {
+  std::string env;                              // table | shelf | nav | hri (any env with a recorder)
+  std::string policy = "random";                // random | zero
+  SafetyLayer safety = SafetyLayer::Atacom;     // between the policy and the env
+  uint64_t seed = 0;                            // env streams and the policy's noise
+  nlohmann::json env_config = nlohmann::json::object();  // overrides of the env's defaults
+};
+
+struct RenderResult {
+  std::string html;
+  int steps = 0;            // steps of the episode (= frames in the page)
+  double episode_return = 0.0;
+  int collisions = 0;       // steps whose info "collision" was set
+  double max_constraint = 0.0;
+  bool terminated = false;  // ended in a terminal state (else truncated at the horizon)
+};
+
+// Runs one episode of env 0 (N = 1) and draws it. Throws std::invalid_argument
+// for an unknown env or policy, or an env without a picture.
+RenderResult render_episode(const RenderConfig& config);
+
+// The page around the episode's data (render_page.cpp): title, the data JSON
+// (one object, see render.cpp), the two plot SVGs.
+std::string render_page_html(const std::string& title, const std::string& data_json, const std::string& constraint_svg,
+                             const std::string& reward_svg);
+
+}  // namespace atacom

@@ -1,0 +1,171 @@
+// `atacom render`: the page is self-contained (no external URL, script,
+// style or font), has the SVG views, the slider and both plots, holds one
+// frame per step with the geometry of its env, marks the episode's
+// terminal event, and the CLI writes it. With chromium on the machine
+// ([slow]) the page's script runs and fills in the status line.
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "src/experiments/render.hpp"
+
+using namespace atacom;
+using nlohmann::json;
+
+namespace {
+
+json page_data(const std::string& html) {
+  const std::string open = "<script id=\"atacom-data\" type=\"application/json\">";
+  const size_t a = html.find(open);
+  REQUIRE(a != std::string::npos);
+  const size_t b = html.find("</script>", a);
+  REQUIRE(b != std::string::npos);
+  return json::parse(html.substr(a + open.size(), b - a - open.size()));
+}
+
+void check_self_contained(const std::string& html) {
+  // The only URL is the SVG namespace the script creates elements in.
+  size_t pos = 0;
+  int urls = 0;
+  while ((pos = html.find("http", pos)) != std::string::npos) {
+    CHECK(html.compare(pos, 26, "http://www.w3.org/2000/svg") == 0);
+    ++urls;
+    pos += 4;
+  }
+  CHECK(urls <= 1);
+  CHECK(html.find("<script src") == std::string::npos);
+  CHECK(html.find("<link") == std::string::npos);
+  CHECK(html.find("url(") == std::string::npos);
+  CHECK(html.find("@import") == std::string::npos);
+  CHECK(html.find("//cdn") == std::string::npos);
+}
+
+int count(const std::string& s, const std::string& what) {
+  int n = 0;
+  for (size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("render: table episode without a safety layer ends at its terminal event, one frame per step", "[render]") {
+  RenderConfig c;
+  c.env = "table";
+  c.policy = "random";
+  c.safety = SafetyLayer::None;
+  c.seed = 1;
+  const RenderResult r = render_episode(c);
+  check_self_contained(r.html);
+  CHECK(r.html.rfind("<!DOCTYPE html>", 0) == 0);
+  CHECK(count(r.html, "<input type=\"range\" id=\"slider\"") == 1);
+  CHECK(count(r.html, "<div class=\"plot\"><svg") == 2);  // constraints and reward
+  CHECK(r.html.find("id=\"views\"") != std::string::npos);
+  const json d = page_data(r.html);
+  REQUIRE(r.steps > 0);
+  CHECK(d["steps"] == r.steps);
+  CHECK(d["frames"].size() == static_cast<size_t>(r.steps));
+  CHECK(d["reward"].size() == static_cast<size_t>(r.steps));
+  CHECK(d["collision"].size() == static_cast<size_t>(r.steps));
+  CHECK(d["views"].size() == 2);  // top and side
+  // Arm geometry: every frame has all link capsules, all PoIs, goal, axis.
+  const size_t caps = d["capsule_radius"].size(), pois = d["sphere_radius"].size();
+  CHECK(caps >= 6);
+  CHECK(pois == 9);
+  for (const json& f : d["frames"]) {
+    CHECK(f["cap"].size() == 6 * caps);
+    CHECK(f["sph"].size() == 3 * pois);
+    CHECK(f["goal"].size() == 3);
+    CHECK(f["axis"].size() == 6);
+  }
+  CHECK(d["statics"]["boxes"].size() >= 2);  // table parts and the torso
+  // A random policy without ATACOM ends early, in collision or at a joint limit,
+  // and the page marks that step.
+  CHECK(r.terminated);
+  CHECK(r.steps < 500);
+  CHECK(d["collision"].back().get<double>() > 0.0);
+  CHECK(r.max_constraint > 0.0);
+}
+
+TEST_CASE("render: nav episode through ATACOM, top view with both robots; bad input is rejected", "[render]") {
+  RenderConfig c;
+  c.env = "nav";
+  c.policy = "zero";
+  c.seed = 3;
+  const RenderResult r = render_episode(c);
+  check_self_contained(r.html);
+  const json d = page_data(r.html);
+  CHECK(d["frames"].size() == static_cast<size_t>(r.steps));
+  CHECK(d["views"].size() == 1);
+  CHECK(d["disc_cls"] == json({"tiago", "fetch"}));
+  CHECK(d["statics"]["boxes"].size() == 4);  // walls
+  CHECK(d["frames"][0]["disc"].size() == 6);
+  CHECK(r.collisions == 0);
+  CHECK(r.max_constraint <= 0.0);
+  c.policy = "sideways";
+  CHECK_THROWS_AS(render_episode(c), std::invalid_argument);
+  c.policy = "zero";
+  c.env = "pendulum";
+  c.safety = SafetyLayer::None;
+  CHECK_THROWS_WITH(render_episode(c), Catch::Contains("no picture"));
+}
+
+TEST_CASE("render: the CLI writes the page and prints its summary", "[render]") {
+  const std::string out = (std::filesystem::temp_directory_path() / "atacom_test_render.html").string();
+  const std::string cmd = std::string(ATACOM_ATACOM_EXE) + " render --env shelf --policy zero --seed 2 --out " + out;
+  FILE* p = popen(cmd.c_str(), "r");
+  REQUIRE(p);
+  char buf[4096];
+  std::string line;
+  while (fgets(buf, sizeof buf, p)) line += buf;
+  CHECK(pclose(p) == 0);
+  const json s = json::parse(line);
+  std::ifstream in(out);
+  std::stringstream html;
+  html << in.rdbuf();
+  CHECK(s["bytes"].get<size_t>() == html.str().size());
+  CHECK(page_data(html.str())["frames"].size() == s["steps"].get<size_t>());
+  std::filesystem::remove(out);
+}
+
+TEST_CASE("render: the page's script runs in headless chromium", "[render][slow]") {
+  const char* candidates[] = {"/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/bin/google-chrome"};
+  std::string browser;
+  for (const char* c : candidates)
+    if (std::filesystem::exists(c)) browser = c;
+  if (browser.empty()) {
+    WARN("no chromium on this machine: skipped");
+    return;
+  }
+  RenderConfig c;
+  c.env = "table";
+  c.policy = "zero";
+  c.seed = 4;
+  const RenderResult r = render_episode(c);
+  const auto dir = std::filesystem::temp_directory_path() / "atacom_test_render_chromium";
+  std::filesystem::create_directories(dir);
+  const std::string page = (dir / "page.html").string();
+  std::ofstream(page) << r.html;
+  const std::string cmd = browser +
+                          " --headless --no-sandbox --disable-gpu --disable-background-networking "
+                          "--disable-component-update --disable-sync --no-first-run --user-data-dir=" +
+                          (dir / "profile").string() + " --dump-dom 'file://" + page + "?step=7' 2>/dev/null";
+  FILE* p = popen(cmd.c_str(), "r");
+  REQUIRE(p);
+  char buf[65536];
+  std::string dom;
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) dom.append(buf, n);
+  pclose(p);
+  std::filesystem::remove_all(dir);
+  // The script drew the views (one SVG per view plus the two plots) and wrote the status of step 7.
+  CHECK(std::regex_search(dom, std::regex("step +7 / " + std::to_string(r.steps))));
+  CHECK(count(dom, "<svg") == 4);
+  CHECK(count(dom, "class=\"link\"") >= 12);  // the link capsules in both views
+}
