@@ -93,7 +93,7 @@ TEST_CASE("render: table episode without a safety layer ends at its terminal eve
   CHECK(r.max_constraint > 0.0);
 }
 
-TEST_CASE("render: nav episode through ATACOM, top view with both robots; bad input is rejected", "[render]") {
+TEST_CASE("render: nav episode through ATACOM, top view with both robots, bad input is rejected", "[render]") {
   RenderConfig c;
   c.env = "nav";
   c.policy = "zero";
