@@ -9,12 +9,18 @@
 #include "atacom/parallel.hpp"
 #include "atacom/policy.hpp"
 #include "atacom/rng.hpp"
+#include "src/core/limits.hpp"
+#include "src/core/value_range.hpp"
 
 namespace atacom {
 
 nlohmann::json run_rollout(const RolloutConfig& cfg) {
-  if (cfg.envs < 1) throw std::invalid_argument("--envs must be >= 1");
-  if (cfg.steps < 1) throw std::invalid_argument("--steps must be >= 1");
+  if (!range::closed(1, limits::kMaxEnvs).contains(cfg.envs))
+    throw std::invalid_argument("--envs is " + std::to_string(cfg.envs) + ", must be " +
+                                range::closed(1, limits::kMaxEnvs).describe());
+  if (!range::closed<long>(1, limits::kMaxSteps).contains(cfg.steps))
+    throw std::invalid_argument("--steps is " + std::to_string(cfg.steps) + ", must be " +
+                                range::closed<long>(1, limits::kMaxSteps).describe());
   const bool trained = cfg.policy == "trained";
   if (!trained && !cfg.run_dir.empty())
     throw std::invalid_argument("--run applies to --policy trained only (the policy is '" + cfg.policy + "')");
