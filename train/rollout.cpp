@@ -11,6 +11,7 @@
 #include "atacom/rng.hpp"
 #include "src/core/limits.hpp"
 #include "src/core/value_range.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
@@ -49,7 +50,7 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   if (cfg.policy == "random") own = make_random_policy(spec.obs_dim, m);
   else if (cfg.policy == "zero") own = make_zero_policy(spec.obs_dim, m);
   else if (cfg.policy == "la") own = make_attractor_policy(env_name, resolve_env_config(env_name, env_config));
-  else if (!trained) throw std::invalid_argument("unknown policy '" + cfg.policy + "' (random, zero, la, trained)");
+  else if (!trained) throw std::invalid_argument("unknown policy '" + printable_text(cfg.policy) + "' (random, zero, la, trained)");
   if (own) policy = own.get();
   if (policy->obs_dim() != spec.obs_dim || policy->act_dim() != m)
     throw std::invalid_argument("the policy's obs/act dims do not fit env '" + env_name + "'");

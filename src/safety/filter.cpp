@@ -89,7 +89,7 @@ json process(const json& j) {
   for (auto it = j.begin(); it != j.end(); ++it) {
     bool ok = false;
     for (const char* kname : known) ok = ok || it.key() == kname;
-    if (!ok) fail("unknown key '" + it.key() + "'");
+    if (!ok) fail("unknown key '" + printable_text(it.key()) + "'");
   }
   for (const char* req : {"f", "G", "J_q", "c", "alpha"})
     if (!j.contains(req)) fail(std::string("missing key '") + req + "'");
