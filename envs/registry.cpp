@@ -7,6 +7,7 @@
 #include "envs/nav/nav_attractor.hpp"
 #include "envs/nav/nav_env.hpp"
 #include "envs/pendulum/pendulum.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
@@ -35,7 +36,7 @@ const EnvEntry& env_entry(const std::string& name) {
     if (e.name == name) return e;
   std::string known;
   for (const auto& e : env_entries()) known += (known.empty() ? "" : ", ") + e.name;
-  throw std::invalid_argument("unknown env '" + name + "' (known: " + known + ")");
+  throw std::invalid_argument("unknown env '" + printable_text(name) + "' (known: " + known + ")");
 }
 
 nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::json& overrides,
@@ -46,7 +47,7 @@ nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::j
   nlohmann::json out = base;
   for (auto it = overrides.begin(); it != overrides.end(); ++it) {
     const std::string key = path.empty() ? it.key() : path + "." + it.key();
-    if (!base.contains(it.key())) throw std::invalid_argument("unknown config key '" + key + "'");
+    if (!base.contains(it.key())) throw std::invalid_argument("unknown config key '" + printable_text(key) + "'");
     const auto& b = base[it.key()];
     const auto& v = it.value();
     if (b.is_object()) {

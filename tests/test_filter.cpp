@@ -46,7 +46,7 @@ TEST_CASE("filter: options (slack per row, smooth basis, equality, J_x)", "[filt
 
 TEST_CASE("filter: malformed lines give an error naming the problem", "[filter]") {
   const struct { const char* line; const char* expect; } cases[] = {
-      {"{not json", "invalid JSON"},
+      {"{not json", "not valid JSON"},
       {R"({"f":[0,0],"G":[[1,0]],"J_q":[[1,0]],"c":[-1],"alpha":[1,0]})", "'G' must be 2 x 2"},
       {R"({"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[-1]})", "missing key 'alpha'"},
       {R"({"f":[0,0],"G":[[1,0],[0,1]],"Jq":[[1,0]],"c":[-1],"alpha":[0,0]})", "unknown key 'Jq'"},
@@ -72,15 +72,16 @@ TEST_CASE("filter: the stream goes on after an error and counts failures", "[fil
       "\n"
       "{\"f\":[0],\"G\":[[1]],\"J_q\":[[1]],\"c\":[-1],\"alpha\":[0.5]}\n");
   std::ostringstream out;
-  CHECK(atacom::run_filter(in, out) == 1);
+  CHECK(atacom::run_filter(in, out) == 2);  // the garbage line and the blank line
   std::istringstream lines(out.str());
   std::string l;
   std::vector<json> results;
   while (std::getline(lines, l)) results.push_back(json::parse(l));
-  REQUIRE(results.size() == 3);
+  REQUIRE(results.size() == 4);  // one answer per line, a blank line included
   CHECK(results[0].contains("a"));
   CHECK(results[1]["line"] == 2);
-  CHECK(results[2].contains("a"));
+  CHECK(results[2]["line"] == 3);
+  CHECK(results[3].contains("a"));
 }
 
 TEST_CASE("filter: the atacom executable streams and exits nonzero after a failure", "[filter]") {

@@ -1,4 +1,5 @@
 #include "train/algorithms.hpp"
+#include "src/core/config_json.hpp"
 
 #include <stdexcept>
 
@@ -38,7 +39,7 @@ const Algorithm& find_algorithm(const std::string& name) {
     if (a.name == name) return a;
   std::string known;
   for (const Algorithm& a : algorithms()) known += (known.empty() ? "" : ", ") + a.name;
-  throw std::invalid_argument("unknown algorithm '" + name + "' (known: " + known + ")");
+  throw std::invalid_argument("unknown algorithm '" + printable_text(name) + "' (known: " + known + ")");
 }
 
 const Algorithm& algorithm_for(ActionSource source, const std::string& learner, SafetyLayer safety) {

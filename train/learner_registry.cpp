@@ -6,6 +6,7 @@
 #include "atacom/learner.hpp"
 #include "train/adversary.hpp"
 #include "train/sac_learner.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
@@ -24,7 +25,7 @@ const LearnerEntry& learner_entry(const std::string& name) {
     if (e.name == name) return e;
   std::string known;
   for (const auto& e : learner_entries()) known += (known.empty() ? "" : ", ") + e.name;
-  throw std::invalid_argument("unknown learner '" + name + "' (known: " + known + ")");
+  throw std::invalid_argument("unknown learner '" + printable_text(name) + "' (known: " + known + ")");
 }
 
 }  // namespace atacom

@@ -25,7 +25,7 @@ Activation parse_activation(const std::string& s) {
   if (s == "tanh") return Activation::Tanh;
   if (s == "sigmoid") return Activation::Sigmoid;
   if (s == "softplus") return Activation::Softplus;
-  throw std::invalid_argument("unknown activation '" + s + "' (known: relu, tanh, sigmoid, softplus)");
+  throw std::invalid_argument("unknown activation '" + printable_text(s) + "' (known: relu, tanh, sigmoid, softplus)");
 }
 
 double activation_gain(Activation a) {

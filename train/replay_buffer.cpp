@@ -7,6 +7,7 @@
 #include <string>
 
 #include "src/core/binary_io.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -26,6 +27,10 @@ ReplayBuffer::ReplayBuffer(int64_t capacity, int obs_dim, int act_dim)
   if (capacity < 1 || obs_dim < 1 || act_dim < 1)
     throw std::invalid_argument("replay buffer: capacity and dimensions must be positive");
   const size_t c = size_t(capacity);
+  // Checked before allocating: a capacity the machine cannot hold is an error naming the key, not std::bad_alloc.
+  limits::require_memory(double(c) * (sizeof(float) * (2.0 * obs_dim + act_dim + 2) + 2),
+                         "sac.replay_capacity = " + std::to_string(capacity) + " (replay buffer of " +
+                             std::to_string(obs_dim) + "-dim observations)");
   obs_.assign(c * obs_dim, 0.0f);
   action_.assign(c * act_dim, 0.0f);
   reward_.assign(c, 0.0f);

@@ -9,12 +9,19 @@
 #include "atacom/parallel.hpp"
 #include "atacom/policy.hpp"
 #include "atacom/rng.hpp"
+#include "src/core/limits.hpp"
+#include "src/core/value_range.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
 nlohmann::json run_rollout(const RolloutConfig& cfg) {
-  if (cfg.envs < 1) throw std::invalid_argument("--envs must be >= 1");
-  if (cfg.steps < 1) throw std::invalid_argument("--steps must be >= 1");
+  if (!range::closed(1, limits::kMaxEnvs).contains(cfg.envs))
+    throw std::invalid_argument("--envs is " + std::to_string(cfg.envs) + ", must be " +
+                                range::closed(1, limits::kMaxEnvs).describe());
+  if (!range::closed<long>(1, limits::kMaxSteps).contains(cfg.steps))
+    throw std::invalid_argument("--steps is " + std::to_string(cfg.steps) + ", must be " +
+                                range::closed<long>(1, limits::kMaxSteps).describe());
   const bool trained = cfg.policy == "trained";
   if (!trained && !cfg.run_dir.empty())
     throw std::invalid_argument("--run applies to --policy trained only (the policy is '" + cfg.policy + "')");
@@ -43,7 +50,7 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   if (cfg.policy == "random") own = make_random_policy(spec.obs_dim, m);
   else if (cfg.policy == "zero") own = make_zero_policy(spec.obs_dim, m);
   else if (cfg.policy == "la") own = make_attractor_policy(env_name, resolve_env_config(env_name, env_config));
-  else if (!trained) throw std::invalid_argument("unknown policy '" + cfg.policy + "' (random, zero, la, trained)");
+  else if (!trained) throw std::invalid_argument("unknown policy '" + printable_text(cfg.policy) + "' (random, zero, la, trained)");
   if (own) policy = own.get();
   if (policy->obs_dim() != spec.obs_dim || policy->act_dim() != m)
     throw std::invalid_argument("the policy's obs/act dims do not fit env '" + env_name + "'");

@@ -408,6 +408,12 @@ const JointRows kJointRows;
 
 // 8x8 transpose in registers: in[k][l] -> out[l][k].
 inline void transpose8(const vd* in, vd* out) {
+#if defined(__clang__)
+  // Clang has no __builtin_shuffle with a mask vector (only the fuzz build,
+  // tests/fuzz, uses clang): the same transpose element by element.
+  for (int l = 0; l < 8; ++l)
+    for (int k = 0; k < 8; ++k) out[l][k] = in[k][l];
+#else
   using lanes::vm;
   const vm lo1 = {0, 8, 2, 10, 4, 12, 6, 14}, hi1 = {1, 9, 3, 11, 5, 13, 7, 15};
   const vm lo2 = {0, 1, 8, 9, 4, 5, 12, 13}, hi2 = {2, 3, 10, 11, 6, 7, 14, 15};
@@ -428,6 +434,7 @@ inline void transpose8(const vd* in, vd* out) {
     out[i] = __builtin_shuffle(u[i], u[4 + i], lo4);
     out[4 + i] = __builtin_shuffle(u[i], u[4 + i], hi4);
   }
+#endif
 }
 }  // namespace
 

@@ -41,13 +41,13 @@ std::string human_activity_name(HumanActivity a) { return kActivityNames[static_
 HumanActivity parse_human_activity(const std::string& s) {
   for (int i = 0; i < 5; ++i)
     if (s == kActivityNames[i]) return static_cast<HumanActivity>(i);
-  throw std::invalid_argument("unknown human activity '" + s + "' (known: walk, reach, phone, turn, pause)");
+  throw std::invalid_argument("unknown human activity '" + printable_text(s) + "' (known: walk, reach, phone, turn, pause)");
 }
 std::string human_split_name(HumanSplit s) { return kSplitNames[static_cast<int>(s)]; }
 HumanSplit parse_human_split(const std::string& s) {
   for (int i = 0; i < 3; ++i)
     if (s == kSplitNames[i]) return static_cast<HumanSplit>(i);
-  throw std::invalid_argument("unknown human motion split '" + s + "' (known: train, test, all)");
+  throw std::invalid_argument("unknown human motion split '" + printable_text(s) + "' (known: train, test, all)");
 }
 
 HumanMotionConfig default_human_motion_config() { return HumanMotionConfig{}; }

@@ -8,7 +8,9 @@
 
 #include "atacom/trainer.hpp"
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "cli/json_file.hpp"
+#include "src/core/limits.hpp"
 #include "src/core/fs_util.hpp"
 #include "train/adversary.hpp"
 #include "train/algorithms.hpp"
@@ -82,10 +84,10 @@ const RegisterCommand reg{Command{
       a->o_env = app.add_option("--env", a->env, "env name (one with constraints: table, shelf, nav)");
       a->o_safety = app.add_option("--safety", a->safety, "the layer under attack: atacom | safelayer | none")
                         ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
-      a->o_steps = app.add_option("--steps", a->steps, "env steps of the attack (all envs together)")
-                       ->check(CLI::PositiveNumber);
-      a->o_seed = app.add_option("--seed", a->seed, "random seed")->check(CLI::NonNegativeNumber);
-      a->o_envs = app.add_option("--envs", a->envs, "parallel envs")->check(CLI::PositiveNumber);
+      a->o_steps = add_integer_flag(app, "--steps", a->steps, range::closed<int64_t>(1, limits::kMaxSteps),
+                                    "env steps of the attack (all envs together)");
+      a->o_seed = add_integer_flag(app, "--seed", a->seed, seed_range<int64_t>(), "random seed");
+      a->o_envs = add_integer_flag(app, "--envs", a->envs, range::closed(1, limits::kMaxEnvs), "parallel envs");
       app.add_option("--config", a->config, "JSON file with env/adversary/train sections overriding the defaults");
       app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();
       app.add_flag("--resume", a->resume, "continue the attack in --out from its last checkpoint");

@@ -5,6 +5,8 @@
 #include "src/experiments/demo.hpp"
 #include "src/core/fs_util.hpp"
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
+#include "src/core/limits.hpp"
 
 namespace {
 
@@ -17,9 +19,11 @@ atacom::cli::RegisterCommand reg(
     {"demo", "safe exploration demo: many diff-drive robots, random policy, with and without ATACOM",
      [](CLI::App& app) -> std::function<int()> {
        auto args = std::make_shared<DemoArgs>();
-       app.add_option("--envs", args->cfg.envs, "number of robots")->check(CLI::PositiveNumber);
-       app.add_option("--steps", args->cfg.steps, "control steps per robot (30 Hz)")->check(CLI::PositiveNumber);
-       app.add_option("--seed", args->cfg.seed, "random seed");
+       using namespace atacom;
+       cli::add_integer_flag(app, "--envs", args->cfg.envs, range::closed(1, limits::kMaxEnvs), "number of robots");
+       cli::add_integer_flag(app, "--steps", args->cfg.steps, range::closed(1, limits::kMaxHorizon),
+                             "control steps per robot (30 Hz)");
+       cli::add_integer_flag(app, "--seed", args->cfg.seed, cli::seed_range<uint64_t>(), "random seed");
        app.add_option("--out", args->out, "directory for summary.json and demo.svg ('' to skip)");
        return [args] {
          const atacom::DemoResult res = atacom::run_demo(args->cfg);

@@ -2,6 +2,8 @@
 #include <iostream>
 
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
+#include "src/core/limits.hpp"
 #include "envs/arm/human_model.hpp"
 #include "envs/arm/human_motion.hpp"
 
@@ -21,9 +23,10 @@ const RegisterCommand reg{{"human-motion",
                              auto seed = std::make_shared<uint64_t>(default_human_motion_config().seed);
                              auto frames = std::make_shared<int>(default_human_motion_config().frames);
                              auto out = std::make_shared<std::string>();
-                             app.add_option("--seed", *seed, "generator seed (the project's library: 2023)");
-                             app.add_option("--frames", *frames, "at least this many frames at 30 Hz")
-                                 ->check(CLI::Range(100, 1000000));
+                             add_integer_flag(app, "--seed", *seed, seed_range<uint64_t>(),
+                                              "generator seed (the project's library: 2023)");
+                             add_integer_flag(app, "--frames", *frames, range::closed(100, 1000000),
+                                              "at least this many frames at 30 Hz");
                              app.add_option("--out", *out, "frames file, e.g. data/human_motion.bin")->required();
                              return [=]() {
                                HumanMotionConfig c = default_human_motion_config();

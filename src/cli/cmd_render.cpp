@@ -3,6 +3,8 @@
 #include <iostream>
 
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
+#include "src/core/limits.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/experiments/render.hpp"
 
@@ -21,7 +23,7 @@ const RegisterCommand reg{
        app.add_option("--env", a->cfg.env, "table | shelf | nav | hri")->required();
        app.add_option("--policy", a->cfg.policy, "random | zero")->check(CLI::IsMember({"random", "zero"}));
        app.add_option("--safety", a->safety, "atacom | none | safelayer: the layer between policy and env");
-       app.add_option("--seed", a->cfg.seed, "seed of the env and the policy");
+       add_integer_flag(app, "--seed", a->cfg.seed, seed_range<decltype(a->cfg.seed)>(), "seed of the env and the policy");
        app.add_option("--config", a->config_file, "JSON file with env config overrides");
        app.add_option("--out", a->out, "the HTML file to write")->required();
        return [a] {

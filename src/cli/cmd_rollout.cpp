@@ -2,7 +2,9 @@
 #include <iostream>
 
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "cli/json_file.hpp"
+#include "src/core/limits.hpp"
 #include "train/rollout.hpp"
 
 namespace {
@@ -49,9 +51,11 @@ atacom::cli::RegisterCommand reg(
                          ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
        a->o_atacom = app.add_option("--atacom", a->atacom, "on | off: the same as --safety atacom | none")
                          ->check(CLI::IsMember({"on", "off"}));
-       app.add_option("--steps", a->cfg.steps, "env steps in total")->check(CLI::PositiveNumber);
-       app.add_option("--envs", a->cfg.envs, "parallel envs")->check(CLI::PositiveNumber);
-       app.add_option("--seed", a->cfg.seed, "random seed");
+       using atacom::range::closed;
+       namespace lim = atacom::limits;
+       atacom::cli::add_integer_flag(app, "--steps", a->cfg.steps, closed<long>(1, lim::kMaxSteps), "env steps in total");
+       atacom::cli::add_integer_flag(app, "--envs", a->cfg.envs, closed(1, lim::kMaxEnvs), "parallel envs");
+       atacom::cli::add_integer_flag(app, "--seed", a->cfg.seed, atacom::cli::seed_range<uint64_t>(), "random seed");
        app.add_option("--config", a->config_file, "JSON file with env config overrides");
        return [a] {
          if (a->cfg.env.empty() && a->cfg.policy != "trained")

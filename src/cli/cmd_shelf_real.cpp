@@ -7,7 +7,9 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/trainer.hpp"
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "cli/json_file.hpp"
+#include "src/core/limits.hpp"
 #include "envs/arm/arm_attractor.hpp"
 #include "envs/arm/shelf_real.hpp"
 
@@ -93,8 +95,9 @@ const RegisterCommand reg{{"shelf-real",
                                                ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
                              o->o_atacom = app.add_option("--atacom", o->atacom, "on | off: the same as --safety atacom | none")
                                                ->check(CLI::IsMember({"on", "off"}));
-                             app.add_option("--trials", o->trials, "trials (one env each)")->check(CLI::PositiveNumber);
-                             app.add_option("--seed", o->seed, "seed of starts and targets");
+                             add_integer_flag(app, "--trials", o->trials, range::closed(1, limits::kMaxShelfTrials),
+                                              "trials (one env each)");
+                             add_integer_flag(app, "--seed", o->seed, seed_range<uint64_t>(), "seed of starts and targets");
                              app.add_option("--config", o->config_file, "JSON file with shelf env config overrides");
                              return [o] { return run(*o); };
                            }}};

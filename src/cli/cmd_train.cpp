@@ -9,7 +9,9 @@
 
 #include "atacom/trainer.hpp"
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "cli/json_file.hpp"
+#include "src/core/limits.hpp"
 #include "train/algorithms.hpp"
 
 namespace atacom::cli {
@@ -87,12 +89,15 @@ const RegisterCommand reg{Command{
       auto a = std::make_shared<TrainArgs>();
       a->o_env = app.add_option("--env", a->env, "env name (see the registry)");
       a->o_algo = app.add_option("--algo", a->algo, algo_help());
-      a->o_seed = app.add_option("--seed", a->seed, "random seed")->check(CLI::NonNegativeNumber);
-      a->o_steps = app.add_option("--steps", a->steps, "env transitions to train for (all envs together)")
-                       ->check(CLI::PositiveNumber);
-      a->o_envs = app.add_option("--envs", a->envs, "parallel training envs N")->check(CLI::PositiveNumber);
-      a->o_eval = app.add_option("--eval-episodes", a->eval_episodes, "episodes per evaluation (train.eval_episodes)")
-                      ->check(CLI::PositiveNumber);
+      // Defaults of these come from the config (docs/training.md), so help names the key instead.
+      a->o_seed = add_integer_flag(app, "--seed", a->seed, seed_range<int64_t>(), "random seed (default: train.seed)");
+      a->o_steps = add_integer_flag(app, "--steps", a->steps, range::closed<int64_t>(1, limits::kMaxSteps),
+                                    "env transitions to train for, all envs together (default: train.steps)");
+      a->o_envs = add_integer_flag(app, "--envs", a->envs, range::closed(1, limits::kMaxEnvs),
+                                   "parallel training envs N (default: train.num_envs)");
+      a->o_eval = add_integer_flag(app, "--eval-episodes", a->eval_episodes, range::closed(1, limits::kMaxEvalEpisodes),
+                                   "episodes per evaluation (default: train.eval_episodes)");
+      for (CLI::Option* o : {a->o_seed, a->o_steps, a->o_envs, a->o_eval}) o->default_str("");
       app.add_option("--config", a->config, "JSON file with env/<learner>/train sections overriding the defaults");
       app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();
       app.add_flag("--resume", a->resume, "continue the run in --out from its last checkpoint");

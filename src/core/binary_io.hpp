@@ -5,6 +5,7 @@
 // with the field name, so a truncated or foreign file gives a clear message
 // instead of garbage state.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <istream>
 #include <ostream>
@@ -51,11 +52,17 @@ void read_vec(std::istream& in, std::vector<T, Alloc>& v, const char* what, int6
                              " elements, expected " + std::to_string(expected_size));
   if (n > (uint64_t{1} << 40) / sizeof(T))
     throw std::runtime_error(std::string("snapshot field ") + what + " has an implausible size");
-  v.resize(static_cast<size_t>(n));
-  if (n == 0) return;
-  in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
-  if (!in || in.gcount() != static_cast<std::streamsize>(n * sizeof(T)))
-    throw std::runtime_error(std::string("snapshot truncated while reading ") + what);
+  // Grown in 16 MiB steps as the bytes arrive: a count the input does not
+  // back (a hostile checkpoint) ends in "truncated", never in a huge allocation.
+  const size_t step = std::max<size_t>(1, (size_t{16} << 20) / sizeof(T));
+  v.clear();
+  while (v.size() < n) {
+    const size_t old = v.size(), take = std::min<size_t>(step, static_cast<size_t>(n) - old);
+    v.resize(old + take);
+    in.read(reinterpret_cast<char*>(v.data() + old), static_cast<std::streamsize>(take * sizeof(T)));
+    if (!in || in.gcount() != static_cast<std::streamsize>(take * sizeof(T)))
+      throw std::runtime_error(std::string("snapshot truncated while reading ") + what);
+  }
 }
 
 // Section tags make a misaligned read fail at the first wrong section.

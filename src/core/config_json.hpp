@@ -108,7 +108,7 @@ inline void require_exact_keys(const nlohmann::json& j, std::initializer_list<co
   for (auto it = j.begin(); it != j.end(); ++it) {
     bool known = false;
     for (const char* k : keys) known = known || it.key() == k;
-    if (!known) throw std::invalid_argument("unknown key '" + it.key() + "' in " + where);
+    if (!known) throw std::invalid_argument("unknown key '" + printable_text(it.key()) + "' in " + where);
   }
   for (const char* k : keys)
     if (!j.contains(k)) throw std::invalid_argument("missing key '" + std::string(k) + "' in " + where);
@@ -194,7 +194,7 @@ class ConfigReader {
   void finish() const {
     for (auto it = j_.begin(); it != j_.end(); ++it)
       if (!seen_.count(it.key()))
-        throw std::invalid_argument("unknown config key '" + section_ + "." + it.key() + "'");
+        throw std::invalid_argument("unknown config key '" + section_ + "." + printable_text(it.key()) + "'");
   }
 
  private:

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/projector.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
@@ -24,7 +25,7 @@ SlackType parse_slack_type(const std::string& s) {
   if (s == "softcorner") return SlackType::SoftCorner;
   if (s == "exponential") return SlackType::Exponential;
   if (s == "quadratic") return SlackType::Quadratic;
-  throw std::invalid_argument("unknown slack type '" + s + "' (softcorner, exponential, quadratic)");
+  throw std::invalid_argument("unknown slack type '" + printable_text(s) + "' (softcorner, exponential, quadratic)");
 }
 
 std::string basis_type_name(BasisType t) { return t == BasisType::Smooth ? "smooth" : "projected"; }
@@ -32,7 +33,7 @@ std::string basis_type_name(BasisType t) { return t == BasisType::Smooth ? "smoo
 BasisType parse_basis_type(const std::string& s) {
   if (s == "projected") return BasisType::Projected;
   if (s == "smooth") return BasisType::Smooth;
-  throw std::invalid_argument("unknown basis '" + s + "' (projected, smooth)");
+  throw std::invalid_argument("unknown basis '" + printable_text(s) + "' (projected, smooth)");
 }
 
 int ProjectorModel::num_equality() const {
@@ -102,7 +103,7 @@ void from_json(const nlohmann::json& j, ProjectorModel& model) {
   for (auto it = j.begin(); it != j.end(); ++it) {
     if (std::find_if(std::begin(known), std::end(known), [&](const char* s) { return it.key() == s; }) ==
         std::end(known))
-      throw std::invalid_argument("projector model: unknown key '" + it.key() + "'");
+      throw std::invalid_argument("projector model: unknown key '" + printable_text(it.key()) + "'");
   }
   ProjectorModel out = default_projector_model(j.at("n").get<int>(), j.at("m").get<int>(), j.at("k").get<int>(),
                                                j.value("p", 0));

@@ -10,6 +10,7 @@
 #include "atacom/rng.hpp"
 #include "src/core/svg.hpp"
 #include "atacom/system.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
@@ -208,7 +209,7 @@ void from_json(const nlohmann::json& j, DemoConfig& c) {
     else if (k == "steps") d.steps = it->get<int>();
     else if (k == "seed") d.seed = it->get<uint64_t>();
     else if (k == "trajectories") d.trajectories = it->get<int>();
-    else throw std::invalid_argument("demo config: unknown key '" + k + "'");
+    else throw std::invalid_argument("demo config: unknown key '" + printable_text(k) + "'");
   }
   c = d;
 }

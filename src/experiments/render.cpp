@@ -10,6 +10,7 @@
 #include "atacom/safe_env.hpp"
 #include "src/core/svg.hpp"
 #include "src/experiments/render_scene.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
@@ -128,7 +129,7 @@ std::string fmt(const char* f, double x) {
 
 RenderResult render_episode(const RenderConfig& cfg) {
   if (cfg.policy != "random" && cfg.policy != "zero")
-    throw std::invalid_argument("unknown render policy '" + cfg.policy + "' (known: random, zero)");
+    throw std::invalid_argument("unknown render policy '" + printable_text(cfg.policy) + "' (known: random, zero)");
   EnvRequest req;
   req.name = cfg.env;
   req.num_envs = 1;

@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/projector.hpp"
+#include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -27,6 +29,9 @@ double number(const json& v, const std::string& what) {
 std::vector<double> vec(const json& j, const std::string& key, int expected = -1) {
   const json& v = j.at(key);
   if (!v.is_array()) fail("'" + key + "' must be an array of numbers");
+  if (v.size() > size_t(limits::kFilterMaxDim))  // n, m, k, p: checked before the projector allocates
+    fail("'" + key + "' has " + std::to_string(v.size()) + " entries, more than the limit of " +
+         std::to_string(limits::kFilterMaxDim));
   if (expected >= 0 && static_cast<int>(v.size()) != expected)
     fail("'" + key + "' has " + std::to_string(v.size()) + " entries, expected " + std::to_string(expected));
   std::vector<double> out;
@@ -84,7 +89,7 @@ json process(const json& j) {
   for (auto it = j.begin(); it != j.end(); ++it) {
     bool ok = false;
     for (const char* kname : known) ok = ok || it.key() == kname;
-    if (!ok) fail("unknown key '" + it.key() + "'");
+    if (!ok) fail("unknown key '" + printable_text(it.key()) + "'");
   }
   for (const char* req : {"f", "G", "J_q", "c", "alpha"})
     if (!j.contains(req)) fail(std::string("missing key '") + req + "'");
@@ -96,7 +101,8 @@ json process(const json& j) {
   const int n = static_cast<int>(f.size()), m = static_cast<int>(alpha.size()), k = static_cast<int>(c.size());
   if (n < 1) fail("'f' must not be empty (it sets n)");
   if (m < 1) fail("'alpha' must not be empty (it sets m)");
-  const int p = j.contains("xdot") ? static_cast<int>(j.at("xdot").size()) : 0;
+  const std::vector<double> xdot = j.contains("xdot") ? vec(j, "xdot") : std::vector<double>{};
+  const int p = static_cast<int>(xdot.size());
 
   ProjectorModel model = default_projector_model(n, m, k, p);
   model.slack = per_row<SlackType>(j, "slack", k, SlackType::SoftCorner, [](const json& v, const std::string& what) {
@@ -122,9 +128,13 @@ json process(const json& j) {
   B.Jq = k ? mat(j, "J_q", k, n, "k x n") : std::vector<double>{};
   if (!k && !(j.at("J_q").is_array() && j.at("J_q").empty())) fail("'J_q' must be [] when 'c' is empty");
   B.c = c;
-  if (p > 0) {
-    B.xdot = vec(j, "xdot", p);
-    B.Jx = k ? mat(j, "J_x", k, p, "k x p") : std::vector<double>{};
+  if (j.contains("J_x")) {  // validated even when p = 0 (then k rows of [])
+    std::vector<double> Jx = k ? mat(j, "J_x", k, p, "k x p") : std::vector<double>{};
+    if (!k && !(j.at("J_x").is_array() && j.at("J_x").empty())) fail("'J_x' must be [] when 'c' is empty");
+    if (p > 0) {
+      B.xdot = xdot;
+      B.Jx = std::move(Jx);
+    }
   }
   B.alpha = alpha;
   project_batch(model, B, {.store_basis = false, .parallel = false});
@@ -143,34 +153,75 @@ json process(const json& j) {
 
 }  // namespace
 
+namespace {
+
+json error_object(long line_number, const std::string& msg) {
+  return {{"error", "line " + std::to_string(line_number) + ": " + msg}, {"line", line_number}};
+}
+
+// Dumps never throw: parsed strings are valid UTF-8 and messages are printable_text.
+std::string dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
+
+// One line of at most `max_bytes` bytes kept ('\n' excluded, a trailing '\r'
+// kept for the JSON parser to skip as whitespace); `length` is the whole
+// line's. Returns false at the end of the input.
+bool read_line(std::streambuf& sb, std::string& line, size_t max_bytes, size_t& length) {
+  line.clear();
+  length = 0;
+  bool any = false;
+  for (int c; (c = sb.sbumpc()) != std::char_traits<char>::eof();) {
+    any = true;
+    if (c == '\n') return true;
+    if (length < max_bytes) line.push_back(static_cast<char>(c));
+    ++length;
+  }
+  return any;
+}
+
+}  // namespace
+
 bool filter_line(const std::string& line, long line_number, std::string& out) {
   json in;
   try {
-    in = json::parse(line);
-  } catch (const json::exception& e) {
-    out = json{{"error", "line " + std::to_string(line_number) + ": invalid JSON: " + e.what()}, {"line", line_number}}.dump();
-    return false;
-  }
-  try {
-    out = process(in).dump();
+    if (line.find_first_not_of(" \t\r") == std::string::npos) {
+      out = dump(error_object(line_number, "blank line (expected one JSON object per line)"));
+      return false;
+    }
+    try {
+      in = parse_json_strict(line, "request");
+    } catch (const std::invalid_argument& e) {
+      out = dump(error_object(line_number, e.what()));
+      return false;
+    }
+    out = dump(process(in));
     return true;
   } catch (const std::exception& e) {
-    json err = {{"error", "line " + std::to_string(line_number) + ": " + e.what()}, {"line", line_number}};
+    json err = error_object(line_number, printable_text(e.what(), 1000));
     if (in.is_object() && in.contains("id")) err["id"] = in.at("id");
-    out = err.dump();
+    out = dump(err);
     return false;
   }
 }
 
-long run_filter(std::istream& in, std::ostream& out) {
+long run_filter(std::istream& in, std::ostream& out, size_t max_line_bytes) {
   std::string line, result;
   long number = 0, failed = 0;
-  while (std::getline(in, line)) {
+  size_t length = 0;
+  std::streambuf* sb = in.rdbuf();
+  while (sb && read_line(*sb, line, max_line_bytes, length)) {
     ++number;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    if (!filter_line(line, number, result)) ++failed;
+    bool ok;
+    if (length > max_line_bytes) {
+      ok = false;
+      result = dump(error_object(number, "line of " + std::to_string(length) + " bytes, longer than the limit of " +
+                                             std::to_string(max_line_bytes) + " (--max-line-bytes)"));
+    } else {
+      ok = filter_line(line, number, result);
+    }
+    if (!ok) ++failed;
     out << result << '\n';
     out.flush();
+    if (!out) throw std::runtime_error("cannot write the answer to line " + std::to_string(number) + " (output error)");
   }
   return failed;
 }

@@ -12,10 +12,16 @@
 //   id     anything; echoed back
 // Output keys: a (m), qdot (n) = f + G a, s (k), lambda, status (bits of
 // ProjectorStatus) and status_flags (their names). A line that cannot be
-// processed produces {"error": "...", "line": L} instead.
+// processed produces {"error": "line L: ...", "line": L} instead: bad or
+// invalid-UTF-8 JSON, duplicate keys, a blank line, a line longer than the
+// limit, n/m/k/p above limits::kFilterMaxDim. Every input line gets exactly
+// one answer line.
 #pragma once
+#include <cstddef>
 #include <iosfwd>
 #include <string>
+
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -24,8 +30,12 @@ namespace atacom {
 bool filter_line(const std::string& line, long line_number, std::string& out);
 
 // Stream stdin-like input to output line by line (flushing each answer, so a
-// controller can use it request/response). Blank lines are skipped.
-// Returns the number of lines that failed.
-long run_filter(std::istream& in, std::ostream& out);
+// controller can use it request/response). Exactly one answer per input line
+// (a blank line gets an error answer); a line longer than `max_line_bytes`
+// is answered with an error without being kept in memory. Returns the number
+// of lines that failed; throws std::runtime_error when `out` fails (a lost
+// answer is never silent).
+long run_filter(std::istream& in, std::ostream& out,
+                size_t max_line_bytes = size_t(limits::kFilterDefaultLineBytes));
 
 }  // namespace atacom

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "atacom/safe_env.hpp"
+#include "src/core/config_json.hpp"
 
 namespace atacom {
 
@@ -29,7 +30,7 @@ std::vector<std::string> safety_layer_names() { return {"none", "atacom", "safel
 SafetyLayer parse_safety_layer(const std::string& name) {
   for (SafetyLayer s : {SafetyLayer::None, SafetyLayer::Atacom, SafetyLayer::SafeLayer})
     if (name == safety_layer_name(s)) return s;
-  throw std::invalid_argument("unknown safety layer '" + name + "' (known: none, atacom, safelayer)");
+  throw std::invalid_argument("unknown safety layer '" + printable_text(name) + "' (known: none, atacom, safelayer)");
 }
 
 std::unique_ptr<BatchEnv> wrap_safety(std::unique_ptr<BatchEnv> env, SafetyLayer layer) {
