@@ -1,0 +1,154 @@
+// Batched SafeLayer: per env, the linearised rows g = dt J_q G,
+// h = C - c - dt (J_q f + J_x xdot), then the QP of kernels/safelayer_qp.
+// Most steps keep a_pi (no row would be crossed in one period), so the cost
+// is dominated by forming g, which is k n (diagonal G) or k n m (dense G).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "atacom/parallel.hpp"
+#include "atacom/safelayer.hpp"
+#include "kernels/safelayer_qp.hpp"
+
+namespace atacom {
+
+namespace {
+
+constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count independent)
+
+struct KernelScratch {
+  safelayer_qp::Scratch qp;
+  std::vector<double> g, h, a_pi;
+  void setup(const SafeLayerModel& mod) {
+    if (g.size() < size_t(mod.k) * mod.m) g.resize(size_t(mod.k) * mod.m);
+    if (h.size() < size_t(mod.k)) h.resize(mod.k);
+    if (a_pi.size() < size_t(mod.m)) a_pi.resize(mod.m);
+    qp.setup(mod.m, mod.k);
+  }
+};
+
+[[gnu::noinline]] KernelScratch& thread_scratch() {
+  thread_local KernelScratch scratch;
+  return scratch;
+}
+
+void check_batch(const SafeLayerModel& mod, const ProjectorBatch& B, const SafeLayerBatch& O) {
+  const size_t N = static_cast<size_t>(B.N);
+  const size_t gsz = mod.g_form == GForm::Diagonal ? size_t(mod.n) : size_t(mod.n) * mod.m;
+  const bool in_ok = B.G.size() >= N * gsz && B.c.size() >= N * mod.k && B.Jq.size() >= N * mod.k * mod.n &&
+                     B.Jx.size() >= N * mod.k * mod.p && B.xdot.size() >= N * mod.p && B.alpha.size() >= N * mod.m &&
+                     (!mod.has_drift || B.f.size() >= N * mod.n);
+  if (!in_ok) throw std::invalid_argument("safelayer: input batch sizes do not match the model (use ProjectorBatch of the same shapes)");
+  if (O.N != B.N || O.a.size() != N * mod.m || O.status.size() != N)
+    throw std::invalid_argument("safelayer: output batch does not match (use SafeLayerBatch(model, N))");
+}
+
+void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatch& O, int e, KernelScratch& S,
+               bool store_rows) {
+  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p;
+  const double dt = mod.dt;
+  uint32_t status = 0;
+  double* a_pi = S.a_pi.data();
+  const double* alpha = B.alpha.data() + size_t(e) * m;
+  for (int j = 0; j < m; ++j) {
+    if (std::isfinite(alpha[j])) {
+      a_pi[j] = std::clamp(alpha[j], -1.0, 1.0);
+    } else {
+      a_pi[j] = 0.0;
+      status |= kSafeLayerAlphaNonFinite;
+    }
+  }
+  const double* G = B.G.data() + size_t(e) * (mod.g_form == GForm::Diagonal ? n : n * m);
+  const double* Jq = B.Jq.data() + size_t(e) * k * n;
+  const double* c = B.c.data() + size_t(e) * k;
+  const double* f = mod.has_drift ? B.f.data() + size_t(e) * n : nullptr;
+  const double* Jx = p ? B.Jx.data() + size_t(e) * k * p : nullptr;
+  const double* xd = p ? B.xdot.data() + size_t(e) * p : nullptr;
+  double* g = S.g.data();
+  double* h = S.h.data();
+  bool finite = true;
+  for (int i = 0; i < k; ++i) {
+    const double* row = Jq + size_t(i) * n;
+    double* gi = g + size_t(i) * m;
+    double F = 0.0;
+    if (mod.g_form == GForm::Diagonal) {
+      for (int j = 0; j < m; ++j) gi[j] = dt * row[j] * G[j];
+    } else {
+      std::fill_n(gi, m, 0.0);
+      for (int l = 0; l < n; ++l) {
+        const double jl = dt * row[l];
+        for (int j = 0; j < m; ++j) gi[j] += jl * G[size_t(l) * m + j];
+      }
+    }
+    if (f)
+      for (int l = 0; l < n; ++l) F += row[l] * f[l];
+    for (int r = 0; r < p; ++r) F += Jx[size_t(i) * p + r] * xd[r];
+    h[i] = mod.threshold[i] - c[i] - dt * F;
+    double s = h[i];
+    for (int j = 0; j < m; ++j) s += gi[j];
+    finite = finite && std::isfinite(s) && !std::isnan(s - s);
+  }
+  double* a = O.a.data() + size_t(e) * m;
+  int iters = 0;
+  if (!finite) {
+    std::fill_n(a, m, 0.0);
+    status |= kSafeLayerModelNonFinite;
+  } else {
+    const safelayer_qp::Result r = safelayer_qp::solve(m, k, g, h, a_pi, a, nullptr, S.qp);
+    status |= r.status;
+    iters = r.iterations;
+  }
+  double corr = 0.0;
+  for (int j = 0; j < m; ++j) corr += (a[j] - a_pi[j]) * (a[j] - a_pi[j]);
+  int active = 0;
+  uint8_t* rows = store_rows ? O.active_rows.data() + size_t(e) * k : nullptr;
+  for (int i = 0; i < k; ++i) {
+    bool act = false;
+    if (finite) {
+      double r = -h[i];
+      for (int j = 0; j < m; ++j) r += g[size_t(i) * m + j] * a[j];
+      act = r >= -kSafeLayerFeasTol;
+    }
+    active += act;
+    if (rows) rows[i] = act;
+  }
+  O.correction[e] = std::sqrt(corr);
+  O.active[e] = active;
+  O.iterations[e] = iters;
+  O.status[e] = status;
+}
+
+}  // namespace
+
+void safelayer_range(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatch& O, int begin, int end,
+                     const SafeLayerOptions& opt) {
+  if (begin >= end) return;
+  KernelScratch& S = thread_scratch();
+  S.setup(mod);
+  for (int e = begin; e < end; ++e) solve_env(mod, B, O, e, S, opt.store_active_rows);
+}
+
+void safelayer_batch(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatch& O,
+                     const SafeLayerOptions& opt) {
+  mod.validate();
+  check_batch(mod, B, O);
+  if (opt.store_active_rows && O.active_rows.size() != size_t(O.N) * mod.k) O.active_rows.assign(size_t(O.N) * mod.k, 0);
+  if (!opt.parallel) {
+    safelayer_range(mod, B, O, 0, B.N, opt);
+    return;
+  }
+  parallel_blocks(B.N, kBlockEnvs, [&](int64_t lo, int64_t hi) {
+    safelayer_range(mod, B, O, static_cast<int>(lo), static_cast<int>(hi), opt);
+  });
+}
+
+uint32_t safelayer_solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, int* iterations,
+                         double* mult) {
+  KernelScratch& S = thread_scratch();
+  S.qp.setup(m, k);
+  const safelayer_qp::Result r = safelayer_qp::solve(m, k, g, h, a_pi, a, mult, S.qp);
+  if (iterations) *iterations = r.iterations;
+  return r.status;
+}
+
+}  // namespace atacom
