@@ -18,10 +18,11 @@ constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count indepen
 
 struct KernelScratch {
   safelayer_qp::Scratch qp;
-  std::vector<double> g, h, a_pi;
+  std::vector<double> g, h, r, a_pi, dtG;
   void setup(const SafeLayerModel& mod) {
     if (g.size() < size_t(mod.k) * mod.m) g.resize(size_t(mod.k) * mod.m);
-    if (h.size() < size_t(mod.k)) h.resize(mod.k);
+    if (h.size() < size_t(mod.k)) h.resize(mod.k), r.resize(mod.k);
+    if (dtG.size() < size_t(mod.m)) dtG.resize(mod.m);
     if (a_pi.size() < size_t(mod.m)) a_pi.resize(mod.m);
     qp.setup(mod.m, mod.k);
   }
@@ -66,13 +67,21 @@ void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatc
   const double* xd = p ? B.xdot.data() + size_t(e) * p : nullptr;
   double* g = S.g.data();
   double* h = S.h.data();
-  bool finite = true;
+  double* r = S.r.data();
+  // One pass forms the rows and their residual at a_pi: most steps keep a_pi
+  // (no row would be crossed within one period) and never reach the QP.
+  // A non-finite input makes some residual non-finite (NaN propagates, and
+  // Inf * 0 is NaN), so one check on r covers f, G, c, J and xdot.
+  bool finite = true, keep = true;
+  double* dtG = S.dtG.data();
+  if (mod.g_form == GForm::Diagonal)
+    for (int j = 0; j < m; ++j) dtG[j] = dt * G[j];
   for (int i = 0; i < k; ++i) {
     const double* row = Jq + size_t(i) * n;
     double* gi = g + size_t(i) * m;
     double F = 0.0;
     if (mod.g_form == GForm::Diagonal) {
-      for (int j = 0; j < m; ++j) gi[j] = dt * row[j] * G[j];
+      for (int j = 0; j < m; ++j) gi[j] = row[j] * dtG[j];
     } else {
       std::fill_n(gi, m, 0.0);
       for (int l = 0; l < n; ++l) {
@@ -82,36 +91,42 @@ void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatc
     }
     if (f)
       for (int l = 0; l < n; ++l) F += row[l] * f[l];
-    for (int r = 0; r < p; ++r) F += Jx[size_t(i) * p + r] * xd[r];
+    for (int q = 0; q < p; ++q) F += Jx[size_t(i) * p + q] * xd[q];
     h[i] = mod.threshold[i] - c[i] - dt * F;
-    double s = h[i];
-    for (int j = 0; j < m; ++j) s += gi[j];
-    finite = finite && std::isfinite(s) && !std::isnan(s - s);
+    double ri = -h[i];
+    for (int j = 0; j < m; ++j) ri += gi[j] * a_pi[j];
+    r[i] = ri;
+    finite = finite && std::isfinite(ri);
+    keep = keep && ri <= kSafeLayerFeasTol;
   }
   double* a = O.a.data() + size_t(e) * m;
   int iters = 0;
+  uint8_t* rows = store_rows ? O.active_rows.data() + size_t(e) * k : nullptr;
   if (!finite) {
     std::fill_n(a, m, 0.0);
     status |= kSafeLayerModelNonFinite;
+    if (rows) std::fill_n(rows, k, uint8_t{0});
+  } else if (keep) {
+    std::copy_n(a_pi, m, a);
   } else {
-    const safelayer_qp::Result r = safelayer_qp::solve(m, k, g, h, a_pi, a, nullptr, S.qp);
-    status |= r.status;
-    iters = r.iterations;
+    const safelayer_qp::Result res = safelayer_qp::solve(m, k, g, h, a_pi, a, nullptr, S.qp);
+    status |= res.status;
+    iters = res.iterations;
+    for (int i = 0; i < k; ++i) {
+      double ri = -h[i];
+      for (int j = 0; j < m; ++j) ri += g[size_t(i) * m + j] * a[j];
+      r[i] = ri;
+    }
   }
   double corr = 0.0;
   for (int j = 0; j < m; ++j) corr += (a[j] - a_pi[j]) * (a[j] - a_pi[j]);
   int active = 0;
-  uint8_t* rows = store_rows ? O.active_rows.data() + size_t(e) * k : nullptr;
-  for (int i = 0; i < k; ++i) {
-    bool act = false;
-    if (finite) {
-      double r = -h[i];
-      for (int j = 0; j < m; ++j) r += g[size_t(i) * m + j] * a[j];
-      act = r >= -kSafeLayerFeasTol;
+  if (finite)
+    for (int i = 0; i < k; ++i) {
+      const bool act = r[i] >= -kSafeLayerFeasTol;
+      active += act;
+      if (rows) rows[i] = act;
     }
-    active += act;
-    if (rows) rows[i] = act;
-  }
   O.correction[e] = std::sqrt(corr);
   O.active[e] = active;
   O.iterations[e] = iters;
