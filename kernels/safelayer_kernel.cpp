@@ -18,11 +18,12 @@ constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count indepen
 
 struct KernelScratch {
   safelayer_qp::Scratch qp;
-  std::vector<double> g, h, r, a_pi, dtG;
+  std::vector<double> g, h, r, a_pi, dtG, v;
   void setup(const SafeLayerModel& mod) {
     if (g.size() < size_t(mod.k) * mod.m) g.resize(size_t(mod.k) * mod.m);
     if (h.size() < size_t(mod.k)) h.resize(mod.k), r.resize(mod.k);
     if (dtG.size() < size_t(mod.m)) dtG.resize(mod.m);
+    if (v.size() < size_t(mod.n)) v.resize(mod.n);
     if (a_pi.size() < size_t(mod.m)) a_pi.resize(mod.m);
     qp.setup(mod.m, mod.k);
   }
@@ -68,36 +69,56 @@ void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatc
   double* g = S.g.data();
   double* h = S.h.data();
   double* r = S.r.data();
-  // One pass forms the rows and their residual at a_pi: most steps keep a_pi
-  // (no row would be crossed within one period) and never reach the QP.
-  // A non-finite input makes some residual non-finite (NaN propagates, and
-  // Inf * 0 is NaN), so one check on r covers f, G, c, J and xdot.
+  // Residuals at a_pi first, without forming g: r_i = c_i - C_i + J_q,i v +
+  // dt J_x,i xdot with v = dt (f + G a_pi), k n multiply-adds instead of
+  // k n m. Most steps keep a_pi (no row would be crossed within one period)
+  // and never form the rows or enter the solver. A non-finite input makes
+  // some residual non-finite (NaN propagates, Inf * 0 is NaN), so one check
+  // on r covers f, G, c, J and xdot.
+  double* v = S.v.data();
+  for (int l = 0; l < n; ++l) {
+    double s = f ? f[l] : 0.0;
+    if (mod.g_form == GForm::Diagonal) {
+      s += G[l] * a_pi[l];
+    } else {
+      for (int j = 0; j < m; ++j) s += G[size_t(l) * m + j] * a_pi[j];
+    }
+    v[l] = dt * s;
+  }
   bool finite = true, keep = true;
-  double* dtG = S.dtG.data();
-  if (mod.g_form == GForm::Diagonal)
-    for (int j = 0; j < m; ++j) dtG[j] = dt * G[j];
   for (int i = 0; i < k; ++i) {
     const double* row = Jq + size_t(i) * n;
-    double* gi = g + size_t(i) * m;
-    double F = 0.0;
-    if (mod.g_form == GForm::Diagonal) {
-      for (int j = 0; j < m; ++j) gi[j] = row[j] * dtG[j];
-    } else {
-      std::fill_n(gi, m, 0.0);
-      for (int l = 0; l < n; ++l) {
-        const double jl = dt * row[l];
-        for (int j = 0; j < m; ++j) gi[j] += jl * G[size_t(l) * m + j];
-      }
-    }
-    if (f)
-      for (int l = 0; l < n; ++l) F += row[l] * f[l];
-    for (int q = 0; q < p; ++q) F += Jx[size_t(i) * p + q] * xd[q];
-    h[i] = mod.threshold[i] - c[i] - dt * F;
-    double ri = -h[i];
-    for (int j = 0; j < m; ++j) ri += gi[j] * a_pi[j];
+    double ri = c[i] - mod.threshold[i];
+    for (int l = 0; l < n; ++l) ri += row[l] * v[l];
+    double fx = 0.0;
+    for (int q = 0; q < p; ++q) fx += Jx[size_t(i) * p + q] * xd[q];
+    ri += dt * fx;
     r[i] = ri;
     finite = finite && std::isfinite(ri);
     keep = keep && ri <= kSafeLayerFeasTol;
+  }
+  if (finite && !keep) {
+    double* dtG = S.dtG.data();
+    if (mod.g_form == GForm::Diagonal)
+      for (int j = 0; j < m; ++j) dtG[j] = dt * G[j];
+    for (int i = 0; i < k; ++i) {
+      const double* row = Jq + size_t(i) * n;
+      double* gi = g + size_t(i) * m;
+      double F = 0.0;
+      if (mod.g_form == GForm::Diagonal) {
+        for (int j = 0; j < m; ++j) gi[j] = row[j] * dtG[j];
+      } else {
+        std::fill_n(gi, m, 0.0);
+        for (int l = 0; l < n; ++l) {
+          const double jl = dt * row[l];
+          for (int j = 0; j < m; ++j) gi[j] += jl * G[size_t(l) * m + j];
+        }
+      }
+      if (f)
+        for (int l = 0; l < n; ++l) F += row[l] * f[l];
+      for (int q = 0; q < p; ++q) F += Jx[size_t(i) * p + q] * xd[q];
+      h[i] = mod.threshold[i] - c[i] - dt * F;
+    }
   }
   double* a = O.a.data() + size_t(e) * m;
   int iters = 0;
