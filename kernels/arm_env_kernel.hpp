@@ -8,6 +8,7 @@
 #include "src/core/sdf.hpp"
 #include "kernels/arm_fk_lanes.hpp"
 #include "kernels/lanes.hpp"
+#include "kernels/redsdf_lanes.hpp"
 #include "kernels/sdf_impl.hpp"
 
 namespace atacom::lanes {
@@ -32,6 +33,7 @@ struct ArmKernelConst {
   int ground_poi[2];
   double ground_h[2];
   std::vector<ArmGtItem> items;
+  const LearnedObstacle* learned_obstacle = nullptr;  // set: the obstacle rows use this field (not `obstacle`)
   explicit ArmKernelConst(const TiagoArmModel& m) : fk(m) {}
 };
 
@@ -51,9 +53,17 @@ static inline void arm_constraints_lanes(const ArmKernelConst& k, const vd* q, c
     o.c[kRowJointUpper + j] = q[j] - k.q_hi[j];
   }
   const int n_obs = static_cast<int>(k.obstacle.size()), n_body = static_cast<int>(k.body.size());
+  vd d_learned[kArmPoi], g_learned[kArmPoi][3];
+  if (k.learned_obstacle) learned_distance_lanes(*k.learned_obstacle, fk.poi, kArmPoi, d_learned, with_grad ? g_learned : nullptr);
   for (int i = 0; i < kArmPoi; ++i) {
     vd g[3];
-    const vd d_obs = sdf_impl::union_of<vd>(k.obstacle.data(), n_obs, k.obstacle_blend, fk.poi[i], with_grad ? g : nullptr);
+    vd d_obs;
+    if (k.learned_obstacle) {
+      d_obs = d_learned[i];
+      if (with_grad) g[0] = g_learned[i][0], g[1] = g_learned[i][1], g[2] = g_learned[i][2];
+    } else {
+      d_obs = sdf_impl::union_of<vd>(k.obstacle.data(), n_obs, k.obstacle_blend, fk.poi[i], with_grad ? g : nullptr);
+    }
     o.c[kRowScene + i] = k.delta_obstacle[i] - d_obs;
     if (with_grad)
       for (int j = 0; j < kArmJoints; ++j)

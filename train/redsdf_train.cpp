@@ -294,6 +294,10 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
                 {"seconds", {{"data", t_data}, {"total", secs()}}},
                 {"frame", "object frame: the arm scene's object at position 0, yaw 0 (base_footprint axes)"}};
   m.manifest["metrics"] = {{"test", sdf_accuracy(m, s, te)}};
+  // The margin a learned row adds to its threshold: the largest over-estimate
+  // near the surface on the test split, plus 5 mm, rounded up to a millimetre.
+  const double over = std::max(0.0, m.manifest["metrics"]["test"]["max_overestimate_band"].get<double>());
+  m.manifest["safety_margin"] = std::ceil((over + 0.005) * 1000.0) / 1000.0;
   save_redsdf(m, dir);
   return m.manifest;
 }

@@ -1,6 +1,7 @@
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
 #include "envs/arm/arm_env.hpp"
+#include "envs/arm/arm_learned_sdf.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -86,6 +87,7 @@ ArmEnvConfig default_arm_env_config(ArmTask task) {
   ArmEnvConfig c;
   c.task = task;
   c.scene = default_arm_scene_config(task);
+  c.sdf = {{arm_task_name(task), "analytic"}};
   c.reward.desired_approach = {1.0, 0.0, 0.0};  // reach forward, gripper horizontal
   // Joint rows: 0.05 rad inside the URDF limits (the authors' base env clips
   // position targets 0.05 rad inside), beta 30 as in their joint-limit rows.
@@ -177,6 +179,7 @@ void to_json(json& j, const ArmEnvConfig& c) {
        {"goal_library_seed", c.goal_library_seed},
        {"goal_jitter", c.goal_jitter},
        {"home", c.home}};
+  if (!c.sdf.empty()) j["sdf"] = c.sdf;
 }
 
 void from_json(const json& j, ArmEnvConfig& c) {
@@ -222,6 +225,15 @@ void from_json(const json& j, ArmEnvConfig& c) {
   c.goal_jitter = r.number("goal_jitter", range::closed_open(0.0, 1.0));
   const auto h = num_array(r.at("home"), kArmJoints, r.path("home"));
   std::copy(h.begin(), h.end(), c.home.begin());
+  c.sdf.clear();
+  if (j.contains("sdf")) {
+    const json& sd = r.at("sdf");
+    if (!sd.is_object()) throw std::invalid_argument("config key 'env.sdf' must be an object {object: analytic | learned | learned:<dir>}");
+    for (const auto& [k, v] : sd.items()) {
+      if (!v.is_string()) throw std::invalid_argument("config key 'env.sdf." + k + "' must be a string");
+      c.sdf[k] = v.get<std::string>();
+    }
+  }
   r.finish();
   c.validate();
 }
@@ -230,6 +242,7 @@ void from_json(const json& j, ArmEnvConfig& c) {
 
 struct ArmEnv::Kernel {
   lanes::ArmKernelConst k;
+  std::shared_ptr<LearnedObstacle> learned;  // the obstacle's learned field, or null (analytic)
   explicit Kernel(const TiagoArmModel& m) : k(m) {}
 };
 
@@ -259,8 +272,10 @@ ArmEnv::ArmEnv(const ArmEnvConfig& config, int num_envs) : config_(config) {
     row_offset_[kRowJointLower + j] = k.q_lo[j];
     row_offset_[kRowJointUpper + j] = k.q_hi[j];
   }
+  kern->learned = load_arm_learned_obstacle(config_.sdf, config_.scene);
+  k.learned_obstacle = kern->learned.get();
   for (int i = 0; i < kArmPoi; ++i) {
-    k.delta_obstacle[i] = model_.scene_cover[i] + config_.obstacle.margin[i];
+    k.delta_obstacle[i] = model_.scene_cover[i] + config_.obstacle.margin[i] + (kern->learned ? kern->learned->margin : 0.0);
     k.delta_body[i] = model_.body_cover[i] + config_.body.margin[i];
     row_offset_[kRowScene + i] = k.delta_obstacle[i];
     row_offset_[kRowBody + i] = k.delta_body[i];

@@ -162,4 +162,10 @@ ArmScene build_arm_scene(const ArmSceneConfig& c, const TiagoArmModel& m) {
   return s;
 }
 
+void arm_object_placement(const ArmSceneConfig& config, Eigen::Matrix3d& R, Eigen::Vector3d& t) {
+  const Placement p = placement(config);
+  R = p.R;
+  t = p.t;
+}
+
 }  // namespace atacom

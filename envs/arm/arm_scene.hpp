@@ -57,4 +57,7 @@ struct ArmScene {
 
 ArmScene build_arm_scene(const ArmSceneConfig& config, const TiagoArmModel& model);
 
+// Where the object frame sits: base_footprint point = R * object point + t.
+void arm_object_placement(const ArmSceneConfig& config, Eigen::Matrix3d& R, Eigen::Vector3d& t);
+
 }  // namespace atacom
