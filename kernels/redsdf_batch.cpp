@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <mutex>
 #include <thread>
 
 #include <tbb/task_arena.h>
@@ -63,7 +64,7 @@ RedsdfBatch::RedsdfBatch(const RedsdfModel& model) : m_(&model) {
       max_width_ = std::max({max_width_, l.out, l.in});
     }
   const int nslots = std::max<int>({tbb::this_task_arena::max_concurrency(), int(std::thread::hardware_concurrency()), 1});
-  slots_.resize(size_t(nslots));
+  slots_.resize(size_t(nslots) + 1);  // + the slot of threads outside the arena
   for (Slot& s : slots_) {
     s.x.assign(size_t(kRedsdfBlock) * model.arch.input_dim(), 0.0f);
     s.acts.assign(off, 0.0f);
@@ -157,12 +158,18 @@ void RedsdfBatch::run_block(Slot& s, const float* p, const float* pose, bool pos
 
 void RedsdfBatch::evaluate_range(const float* p, const float* pose, bool pose_shared, int64_t lo, int64_t hi,
                                  float* d, float* grad) {
+  auto run = [&](Slot& s) {
+    for (int64_t b = lo; b < hi; b += kRedsdfBlock)
+      run_block(s, p, pose, pose_shared, b, int(std::min<int64_t>(kRedsdfBlock, hi - b)), d, grad);
+  };
   const int idx = tbb::this_task_arena::current_thread_index();
-  if (idx < 0 || size_t(idx) >= slots_.size())
-    throw std::logic_error("RedsdfBatch: worker index outside the scratch slots");
-  Slot& s = slots_[size_t(idx)];
-  for (int64_t b = lo; b < hi; b += kRedsdfBlock)
-    run_block(s, p, pose, pose_shared, b, int(std::min<int64_t>(kRedsdfBlock, hi - b)), d, grad);
+  if (idx >= 0 && size_t(idx) + 1 < slots_.size()) {
+    run(slots_[size_t(idx)]);
+  } else {
+    // A thread outside the TBB arena (or beyond its slots): the shared last slot, one caller at a time.
+    std::lock_guard<std::mutex> lock(external_mutex_);
+    run(slots_.back());
+  }
 }
 
 void RedsdfBatch::evaluate(const float* p, const float* pose, bool pose_shared, int64_t n, float* d, float* grad) {

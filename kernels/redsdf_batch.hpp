@@ -8,10 +8,11 @@
 // scalar and one backward gives all of grad_p d. Cost ~ 2x the forward MACs
 // (the first layer's backward only forms its 3 point columns).
 //
-// Scratch is one slot per TBB worker, sized at construction; evaluate()
-// never allocates.
+// Scratch is one slot per TBB worker (plus one, under a mutex, for threads
+// outside the arena), sized at construction; evaluate() never allocates.
 #pragma once
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "src/core/redsdf_model.hpp"
@@ -53,7 +54,8 @@ class RedsdfBatch {
   const RedsdfModel* m_;
   std::vector<size_t> act_off_;  // offsets of each layer's output in Slot::acts (trunk, head, side)
   int max_width_ = 0;
-  std::vector<Slot> slots_;      // one per TBB worker
+  std::vector<Slot> slots_;      // one per TBB worker, then one for threads outside the arena
+  std::mutex external_mutex_;    // guards that last slot
 };
 
 }  // namespace atacom
