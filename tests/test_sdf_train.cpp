@@ -12,7 +12,7 @@
 
 using namespace atacom;
 
-TEST_CASE("sdf data: labels and gradients are the exact union distance", "[redsdf]") {
+TEST_CASE("sdf data: labels are the scene's smooth union (never above the exact distance) or the exact one", "[redsdf]") {
   const ShapeUnion table = sdf_object_geometry("table");
   SdfDataConfig c = default_sdf_data_config();
   c.surface_points = 300;
@@ -21,10 +21,18 @@ TEST_CASE("sdf data: labels and gradients are the exact union distance", "[redsd
   int near = 0;
   for (int i = 0; i < s.n; ++i) {
     const Eigen::Vector3d p(s.p[size_t(3 * i)], s.p[size_t(3 * i + 1)], s.p[size_t(3 * i + 2)]);
-    CHECK(std::abs(s.y[size_t(i)] - union_distance_exact(table, p)) < 1e-6);
+    CHECK(std::abs(s.y[size_t(i)] - union_distance(table, p)) < 1e-6);
+    CHECK(s.y[size_t(i)] <= union_distance_exact(table, p) + 1e-6);
     near += std::abs(s.y[size_t(i)]) < 0.1;
   }
   CHECK(near > s.n / 2);
+  CHECK(table.blend > 0.0);
+  c.blend = 0.0;
+  const SdfSamples e = make_static_sdf_samples(table, c);
+  for (int i = 0; i < e.n; i += 7) {
+    const Eigen::Vector3d p(e.p[size_t(3 * i)], e.p[size_t(3 * i + 1)], e.p[size_t(3 * i + 2)]);
+    CHECK(std::abs(e.y[size_t(i)] - union_distance_exact(table, p)) < 1e-6);
+  }
   CHECK_THROWS_WITH(sdf_object_geometry("human"), Catch::Contains("not implemented yet"));
 }
 

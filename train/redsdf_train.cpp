@@ -64,7 +64,6 @@ ShapeUnion sdf_object_geometry(const std::string& object, Eigen::Vector3d* centr
   ArmSceneConfig sc = default_arm_scene_config(parse_arm_task(object));
   sc.position.setZero();
   sc.yaw_deg = 0;
-  sc.blend = 0.0;
   const ArmScene scene = build_arm_scene(sc, load_tiago_arm_model(0.3));
   if (centre) {
     Eigen::Vector3d lo, hi;

@@ -37,8 +37,8 @@ SdfTrainConfig default_sdf_train_config(const std::string& object);
 void to_json(nlohmann::json& j, const SdfTrainConfig& c);
 void from_json(const nlohmann::json& j, SdfTrainConfig& c);  // unknown keys rejected
 
-// The object's exact geometry in its own frame (the arm scene's object at
-// position 0, yaw 0), and the centre the regulariser pulls towards (the
+// The object's geometry in its own frame (the arm scene's object at
+// position 0, yaw 0, with the scene's smooth-union blend), and the centre the regulariser pulls towards (the
 // middle of its bounds). Throws std::invalid_argument for an unknown object.
 ShapeUnion sdf_object_geometry(const std::string& object, Eigen::Vector3d* centre = nullptr);
 

@@ -19,7 +19,7 @@ SdfDataConfig default_sdf_data_config() {
 
 void to_json(nlohmann::json& j, const SdfDataConfig& c) {
   j = {{"surface_points", c.surface_points}, {"epsilons", c.epsilons}, {"volume_fraction", c.volume_fraction},
-       {"volume_margin", c.volume_margin},   {"seed", c.seed}};
+       {"volume_margin", c.volume_margin},   {"blend", c.blend},  {"seed", c.seed}};
 }
 
 void from_json(const nlohmann::json& j, SdfDataConfig& c) {
@@ -28,8 +28,11 @@ void from_json(const nlohmann::json& j, SdfDataConfig& c) {
   r.get("epsilons", c.epsilons);
   r.get("volume_fraction", c.volume_fraction, range::closed(0.0, 10.0));
   r.get("volume_margin", c.volume_margin, range::closed(0.0, 10.0));
+  r.get("blend", c.blend, range::closed(-1.0, 0.5));
   r.get("seed", c.seed);
   r.finish();
+  if (c.blend < 0.0 && c.blend != -1.0)
+    throw std::invalid_argument("config key 'data.blend' must be -1 (the object's own) or in [0, 0.5]");
   if (c.epsilons.empty() || c.epsilons.size() > 256)
     throw std::invalid_argument("config key 'data.epsilons' must hold 1 to 256 offsets");
   for (double e : c.epsilons)
@@ -53,8 +56,9 @@ void union_box_bounds(const ShapeUnion& object, Eigen::Vector3d& lo, Eigen::Vect
 SdfSamples make_static_sdf_samples(const ShapeUnion& object, const SdfDataConfig& cfg) {
   Eigen::Vector3d lo, hi;
   union_box_bounds(object, lo, hi);
-  ShapeUnion exact = object;
+  ShapeUnion exact = object, label = object;
   exact.blend = 0.0;
+  if (cfg.blend >= 0.0) label.blend = cfg.blend;
   // Faces weighted by area.
   struct Face { int shape, axis; double sign, area; };
   std::vector<Face> faces;
@@ -72,7 +76,7 @@ SdfSamples make_static_sdf_samples(const ShapeUnion& object, const SdfDataConfig
   SdfSamples out;
   auto push = [&](const Eigen::Vector3d& q) {
     Eigen::Vector3d g;
-    const double d = union_distance(exact, q, &g);
+    const double d = union_distance(label, q, &g);
     for (int k = 0; k < 3; ++k) out.p.push_back(float(q(k))), out.grad.push_back(float(g(k)));
     out.y.push_back(float(d));
     ++out.n;

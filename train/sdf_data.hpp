@@ -5,7 +5,10 @@
 // for the far field. Labels and gradients are the exact union distance at the
 // shifted point, not the offset (so an offset that crosses a thin part or
 // lands near another part is still labelled right, and nothing needs the
-// reference's cleaning step).
+// reference's cleaning step). By default the union is the env's smooth union
+// (src/core/sdf.hpp): it never exceeds the exact distance, so a bound on
+// learned - label is also a bound on learned - exact, and the field has no
+// kinks at the seams between parts (which made ATACOM overshoot there).
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -22,6 +25,8 @@ struct SdfDataConfig {
   std::vector<double> epsilons;                // signed offsets along the normal, m
   double volume_fraction = 0.2;                // extra uniform samples, as a fraction of the surface ones
   double volume_margin = 0.8;                  // the uniform box: object bounds grown by this, m
+  double blend = -1.0;                         // labels' smooth-union k, m: -1 = the object's own
+                                               // (the env's rows), 0 = the exact min
   uint64_t seed = 1;
 };
 // The one default factory: the reference's TIAGo epsilon list (20 values).
