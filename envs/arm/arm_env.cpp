@@ -176,6 +176,7 @@ ArmEnv::ArmEnv(const ArmEnvConfig& config, int num_envs) : config_(config) {
     items_.assign(N * kernel_->k.items.size() * 6, 0.0);
     contact_.assign(N, 0);
     hd_.assign(N, 0.0);
+    final_cap_.assign(N * kHumanCapsules * 6, 0.0);
   }
   buffers_.resize(spec_, num_envs);
   seed(0);
@@ -402,11 +403,14 @@ void ArmEnv::eval_group(int e0, int cnt, const double* actions) {
     ql[j] = lanes::load_strided(&q_[static_cast<size_t>(e0) * kArmJoints + j], kArmJoints, cnt);
   // HRI: the humans advance on their own clock.
   lanes::HumanCapsLanes h;
+  int64_t human_pre_ns = 0, human_ns = 0;  // inside the "rest" and the "distances" windows
   if (hri()) {
+    const int64_t th = prof ? now_ns() : 0;
     for (int l = 0; l < cnt; ++l) human_t_[size_t(e0 + l)] += replay_.frames_per_step;
     human_at(e0, cnt);
     constexpr int stride = kHumanCapsules * 6;
     lanes::human_load_caps_lanes(&humans_.cap[size_t(e0) * stride], &humans_.cap_vel[size_t(e0) * stride], cnt, h);
+    if (prof) human_pre_ns = now_ns() - th;
   }
   // 2. Kinematics, constraints and ground truth of the reached state.
   const int64_t t1 = prof ? now_ns() : 0;
@@ -416,11 +420,15 @@ void ArmEnv::eval_group(int e0, int cnt, const double* actions) {
   const int64_t t2 = prof ? now_ns() : 0;
   lanes::arm_constraints_lanes(k, ql, fk, o, true);
   if (hri()) {
+    const int64_t th = prof ? now_ns() : 0;
     lanes::arm_hri_rows_lanes(k, fk, h, o, true);
+    const int64_t tg = prof ? now_ns() : 0;
     const size_t n_items = k.items.size();
     lanes::arm_ground_truth_lanes(k, ql, fk, o, cnt, &items_[size_t(e0) * n_items * 6]);
+    const int64_t tc = prof ? now_ns() : 0;
     human_contact_range(humans_, *k.human_fk, items_.data(), robot_radii_.data(), static_cast<int>(n_items),
                         contact_.data(), hd_.data(), e0, e0 + cnt);
+    if (prof) human_ns += (tg - th) + (now_ns() - tc);
   } else {
     lanes::arm_ground_truth_lanes(k, ql, fk, o, cnt);
   }
@@ -487,6 +495,10 @@ void ArmEnv::eval_group(int e0, int cnt, const double* actions) {
     if (term || trunc) {
       B.episode_return[e] = ret_[ei];
       B.episode_length[e] = t_[ei];
+      if (hri()) {
+        constexpr size_t stride = kHumanCapsules * 6;
+        std::copy_n(&humans_.cap[e * stride], stride, &final_cap_[e * stride]);
+      }
       reset_env(ei);
       info[kInfoResetFallback] = fallback_[ei];
     } else {
@@ -495,9 +507,11 @@ void ArmEnv::eval_group(int e0, int cnt, const double* actions) {
   }
   if (prof) {
     const int64_t t4 = now_ns();
+    // HRI: the human's share is taken out of the sections it ran inside.
     prof_ns_[0].fetch_add(t2 - t1, std::memory_order_relaxed);
-    prof_ns_[1].fetch_add(t3 - t2, std::memory_order_relaxed);
-    prof_ns_[2].fetch_add((t1 - t0) + (t4 - t3), std::memory_order_relaxed);
+    prof_ns_[1].fetch_add(t3 - t2 - (hri() ? human_ns : 0), std::memory_order_relaxed);
+    prof_ns_[hri() ? 3 : 2].fetch_add((t1 - t0) + (t4 - t3) - human_pre_ns, std::memory_order_relaxed);
+    if (hri()) prof_ns_[2].fetch_add(human_ns + human_pre_ns, std::memory_order_relaxed);
   }
 }
 

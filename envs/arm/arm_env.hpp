@@ -138,7 +138,11 @@ class ArmEnv final : public ControlAffineEnv {
   ProjectorModel projector_model() const override;
   void constraint_model(ProjectorBatch& pb, int begin, int end) const override;
 
-  std::vector<std::string> profile_sections() const override { return {"kinematics", "distances", "rest"}; }
+  // HRI adds "human": motion playback, capsule FK, the human rows and the contact check.
+  std::vector<std::string> profile_sections() const override {
+    if (hri()) return {"kinematics", "distances", "human", "rest"};
+    return {"kinematics", "distances", "rest"};
+  }
   void set_profiling(bool on) override;
   std::vector<double> profile_seconds() const override;
 
@@ -168,6 +172,12 @@ class ArmEnv final : public ControlAffineEnv {
   // HRI: the humans (pose, pose_rate, capsules) and their motion times (frames).
   const HumanBatch& humans() const { return humans_; }
   const std::vector<double>& human_time() const { return human_t_; }
+  // HRI: env i's human capsules (16 x 2 x 3) at the state the last step
+  // reached (before an autoreset replaced them), for renderers.
+  const double* human_capsules_reached(int i) const {
+    const size_t off = static_cast<size_t>(i) * kHumanCapsules * 6;
+    return buffers_.done(i) ? &final_cap_[off] : &humans_.cap[off];
+  }
   // HRI: place env i's human at motion time t (frames) and recompute its rows.
   void set_human_time(int i, double t);
   // Place env i in a given state (evaluation protocols, tests): sets q and the
@@ -233,9 +243,10 @@ class ArmEnv final : public ControlAffineEnv {
   std::vector<double> items_;      // (N x items x 6) robot parts in the base frame (contact scratch)
   std::vector<uint8_t> contact_;   // (N)           human contact of the last step
   std::vector<double> hd_;         // (N)           robot-to-human distance of the last step
+  std::vector<double> final_cap_;  // (N x 16 x 6)  capsules of an episode's last step (written on autoreset)
   uint64_t seed_ = 0;
 
-  std::atomic<int64_t> prof_ns_[3] = {0, 0, 0};
+  std::atomic<int64_t> prof_ns_[4] = {0, 0, 0, 0};
   bool profiling_ = false;
 };
 

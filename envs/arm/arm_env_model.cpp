@@ -227,7 +227,9 @@ void ArmEnv::set_profiling(bool on) {
 }
 
 std::vector<double> ArmEnv::profile_seconds() const {
-  return {prof_ns_[0].load() * 1e-9, prof_ns_[1].load() * 1e-9, prof_ns_[2].load() * 1e-9};
+  std::vector<double> out;
+  for (size_t i = 0; i < profile_sections().size(); ++i) out.push_back(prof_ns_[i].load() * 1e-9);
+  return out;
 }
 
 void ArmEnv::write_obs(int e, float* obs) const {
