@@ -90,11 +90,11 @@ TEST_CASE("no allocation: projector kernel paths after warm-up", "[alloc]") {
 #endif
 }
 
-TEST_CASE("no allocation: arm env step, resets and constraint model", "[alloc]") {
+TEST_CASE("no allocation: arm env step, resets and constraint model (table, shelf, hri)", "[alloc]") {
 #if !ATACOM_COUNT_ALLOCS
   SUCCEED("allocation counting disabled under AddressSanitizer");
 #else
-  for (ArmTask task : {ArmTask::Table, ArmTask::Shelf}) {
+  for (ArmTask task : {ArmTask::Table, ArmTask::Shelf, ArmTask::Hri}) {
     const int N = 200;  // one parallel block: runs on this thread
     ArmEnv env(default_arm_env_config(task), N);
     ProjectorBatch pb(env.projector_model(), N);
