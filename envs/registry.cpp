@@ -20,6 +20,8 @@ const std::vector<EnvEntry>& env_entries() {
        make_shelf_env, arm_sac_defaults, make_shelf_attractor},
       {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
        &nav_default_config_json, &make_nav_env, nullptr, make_nav_attractor},
+      {"hri", "HRI-Sim: TIAGo++ arm carrying a cup upright past a moving human (44 constraints)", true,
+       hri_env_default_config, make_hri_env, hri_sac_defaults, make_hri_attractor},
       pendulum_env_entry(),
   };
   return entries;

@@ -76,6 +76,9 @@ const Golden kGolden[] = {
     {"shelf", SafetyLayer::Atacom, 0x5d2e8814c4401532ull, 0x382365a8cb8bfdf9ull},
     {"nav", SafetyLayer::None, 0x9b09f56ba46313c5ull, 0x01893b328f8f0be9ull},
     {"nav", SafetyLayer::Atacom, 0x3d3ac1a8bd25644aull, 0x9bc3f3b96514cb8cull},
+    // hri: native recorded; portable 0 = not recorded yet (checked for thread invariance only).
+    {"hri", SafetyLayer::None, 0, 0x82d7cffe2b8973b0ull},
+    {"hri", SafetyLayer::Atacom, 0, 0x3f034850a977e925ull},
 };
 
 template <class T>
@@ -156,6 +159,10 @@ TEST_CASE("golden hashes: fixed action sequences give committed bits for 1, 2 an
       continue;
     }
     const uint64_t want = kBuild == Build::Portable ? g.portable : g.native;
+    if (want == 0) {  // an env added on a machine that built only the other flavour
+      WARN(label << ": constant not yet recorded for " << kBuildName << ", hash " << hex(h[0]));
+      continue;
+    }
     INFO("expected " << hex(want));
     CHECK(h[0] == want);
   }

@@ -12,6 +12,7 @@
 #include "envs/arm/human_motion.hpp"
 #include "envs/arm/human_rows.hpp"
 #include "atacom/projector.hpp"
+#include "kernels/redsdf_batch.hpp"
 #include "atacom/rng.hpp"
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -89,11 +90,11 @@ TEST_CASE("no allocation: projector kernel paths after warm-up", "[alloc]") {
 #endif
 }
 
-TEST_CASE("no allocation: arm env step, resets and constraint model", "[alloc]") {
+TEST_CASE("no allocation: arm env step, resets and constraint model (table, shelf, hri)", "[alloc]") {
 #if !ATACOM_COUNT_ALLOCS
   SUCCEED("allocation counting disabled under AddressSanitizer");
 #else
-  for (ArmTask task : {ArmTask::Table, ArmTask::Shelf}) {
+  for (ArmTask task : {ArmTask::Table, ArmTask::Shelf, ArmTask::Hri}) {
     const int N = 200;  // one parallel block: runs on this thread
     ArmEnv env(default_arm_env_config(task), N);
     ProjectorBatch pb(env.projector_model(), N);
@@ -139,6 +140,26 @@ TEST_CASE("no allocation: human motion, capsules, rows and contacts", "[alloc]")
     human_rows_range(rows, m.fk, B, poi.data(), J.data(), c.data(), Jq.data(), dcdt.data(), dex.data(), 0, N);
     human_contact_range(B, m.fk, it.data(), radii.data(), items, contact.data(), dmin.data(), 0, N);
   }
+  const long allocs = g_allocs.load() - before;
+  CHECK(allocs == 0);
+#endif
+}
+
+TEST_CASE("no allocation: learned SDF batched inference after construction", "[alloc]") {
+#if !ATACOM_COUNT_ALLOCS
+  SUCCEED("allocation counting disabled under AddressSanitizer");
+#else
+  RedsdfArch a;
+  a.pose_dim = 2;
+  a.hidden = {64, 64, 64, 64};
+  RedsdfModel m(a);
+  init_redsdf(m, 1);
+  RedsdfBatch batch(m);
+  const int n = 4096 + 17;
+  std::vector<float> p(3 * size_t(n), 0.3f), pose(2 * size_t(n), 0.1f), d(static_cast<size_t>(n)), g(3 * static_cast<size_t>(n));
+  batch.evaluate(p.data(), pose.data(), false, n, d.data(), g.data());  // warm-up: TBB worker start
+  const long before = g_allocs.load();
+  for (int rep = 0; rep < 3; ++rep) batch.evaluate(p.data(), pose.data(), false, n, d.data(), g.data());
   const long allocs = g_allocs.load() - before;
   CHECK(allocs == 0);
 #endif

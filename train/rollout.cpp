@@ -66,7 +66,9 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   std::vector<int> collision_cols;
   for (size_t c = 0; c < ni; ++c) {
     const std::string& name = spec.info_names[c];
-    if (name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0) collision_cols.push_back(int(c));
+    // Event counts: every *collision column, and HRI-Sim's spill (episodes with a spill).
+    if ((name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0) || name == "spill")
+      collision_cols.push_back(int(c));
   }
   std::vector<double> collision_sums(collision_cols.size(), 0.0);
   long episodes = 0, terminations = 0, violations = 0, nonfinite = 0;

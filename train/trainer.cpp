@@ -349,7 +349,7 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
     const std::string& name = spec_.info_names[size_t(col)];
     s["train_" + name] = jnum(st_.train_info_sums[size_t(col)]);
     // Collision counts also under the plural names: train_collisions, ...
-    if (ends_with_collision(name)) s["train_" + name + "s"] = jnum(st_.train_info_sums[size_t(col)]);
+    if (ends_with_collision(name) || name == "spill") s["train_" + name + "s"] = jnum(st_.train_info_sums[size_t(col)]);
   }
   if (learner_) {
     const nlohmann::json ls = learner_->summary();

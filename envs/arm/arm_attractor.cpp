@@ -11,7 +11,7 @@
 namespace atacom {
 
 ArmAttractorPolicy::ArmAttractorPolicy(const ArmEnvConfig& c, const ArmAttractorParams& p)
-    : model_(load_tiago_arm_model(c.torso_lift)), p_(p) {
+    : model_(load_tiago_arm_model(c.torso_lift)), p_(p), obs_dim_(c.task == ArmTask::Hri ? kHriObsDim : kArmObsDim) {
   for (int j = 0; j < kArmJoints; ++j) vmax_[size_t(j)] = c.velocity_scale * model_.velocity[size_t(j)];
 }
 
@@ -34,7 +34,7 @@ void ArmAttractorPolicy::act_one(const float* o, double* a) const {
 
 void ArmAttractorPolicy::act(const float* obs, int N, bool, Rng*, double* actions) {
   parallel_blocks(N, 64, [&](int64_t b, int64_t e) {
-    for (int64_t i = b; i < e; ++i) act_one(obs + i * kArmObsDim, actions + i * kArmJoints);
+    for (int64_t i = b; i < e; ++i) act_one(obs + i * obs_dim_, actions + i * kArmJoints);
   });
 }
 
@@ -48,5 +48,6 @@ std::unique_ptr<Policy> make_for(ArmTask task, const nlohmann::json& resolved_co
 
 std::unique_ptr<Policy> make_table_attractor(const nlohmann::json& config) { return make_for(ArmTask::Table, config); }
 std::unique_ptr<Policy> make_shelf_attractor(const nlohmann::json& config) { return make_for(ArmTask::Shelf, config); }
+std::unique_ptr<Policy> make_hri_attractor(const nlohmann::json& config) { return make_for(ArmTask::Hri, config); }
 
 }  // namespace atacom

@@ -31,7 +31,7 @@ struct ArmAttractorParams {
 class ArmAttractorPolicy final : public Policy {
  public:
   ArmAttractorPolicy(const ArmEnvConfig& env_config, const ArmAttractorParams& params = ArmAttractorParams{});
-  int obs_dim() const override { return kArmObsDim; }
+  int obs_dim() const override { return obs_dim_; }
   int act_dim() const override { return kArmJoints; }
   std::string kind() const override { return "attractor"; }
   // Deterministic; `deterministic` and `rngs` are unused.
@@ -43,10 +43,12 @@ class ArmAttractorPolicy final : public Policy {
   TiagoArmModel model_;
   ArmAttractorParams p_;
   std::array<double, kArmJoints> vmax_{};
+  int obs_dim_ = kArmObsDim;  // HRI: kHriObsDim (the attractor reads the first 10 entries only)
 };
 
 // Registry hooks (EnvEntry::make_attractor) of table and shelf.
 std::unique_ptr<Policy> make_table_attractor(const nlohmann::json& resolved_config);
 std::unique_ptr<Policy> make_shelf_attractor(const nlohmann::json& resolved_config);
+std::unique_ptr<Policy> make_hri_attractor(const nlohmann::json& resolved_config);
 
 }  // namespace atacom

@@ -1,8 +1,10 @@
-// Registry hooks of the manipulation envs: "table" (TableEnv) and "shelf"
-// (ShelfEnvSim). The task is fixed by the name; the JSON holds everything else.
+// Registry hooks of the manipulation envs: "table" (TableEnv), "shelf"
+// (ShelfEnvSim) and "hri" (HRI-Sim). The task is fixed by the name; the JSON
+// holds everything else.
 #include <stdexcept>
 
 #include "envs/arm/arm_env.hpp"
+#include "train/sac.hpp"
 
 namespace atacom {
 
@@ -23,14 +25,31 @@ nlohmann::json arm_sac_defaults(SafetyLayer safety) {
   return {{"lr_actor", lr}, {"lr_critic", lr}, {"lr_alpha", 1e-6}, {"target_entropy", -10.0}};
 }
 
+// HRI: the authors' launcher overrides the networks to 512-512-256
+// (reference 5.2 'hri_atacom'); the rest as the arm envs. Top-level keys
+// replace, so actor and critic are given whole.
+nlohmann::json hri_sac_defaults(SafetyLayer safety) {
+  nlohmann::json d = arm_sac_defaults(safety);
+  const SacConfig base = default_sac_config();
+  MlpConfig actor = base.actor, critic = base.critic;
+  actor.hidden = critic.hidden = {512, 512, 256};
+  d["actor"] = actor;
+  d["critic"] = critic;
+  return d;
+}
+
 nlohmann::json table_env_default_config() { return default_arm_env_config(ArmTask::Table); }
 nlohmann::json shelf_env_default_config() { return default_arm_env_config(ArmTask::Shelf); }
+nlohmann::json hri_env_default_config() { return default_arm_env_config(ArmTask::Hri); }
 
 std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs) {
   return make_arm(ArmTask::Table, config, num_envs);
 }
 std::unique_ptr<BatchEnv> make_shelf_env(const nlohmann::json& config, int num_envs) {
   return make_arm(ArmTask::Shelf, config, num_envs);
+}
+std::unique_ptr<BatchEnv> make_hri_env(const nlohmann::json& config, int num_envs) {
+  return make_arm(ArmTask::Hri, config, num_envs);
 }
 
 }  // namespace atacom

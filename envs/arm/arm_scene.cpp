@@ -61,12 +61,15 @@ json scene_reference() {
 }
 }  // namespace
 
-std::string arm_task_name(ArmTask t) { return t == ArmTask::Table ? "table" : "shelf"; }
+std::string arm_task_name(ArmTask t) {
+  return t == ArmTask::Table ? "table" : t == ArmTask::Shelf ? "shelf" : "hri";
+}
 
 ArmTask parse_arm_task(const std::string& s) {
   if (s == "table") return ArmTask::Table;
   if (s == "shelf") return ArmTask::Shelf;
-  throw std::invalid_argument("unknown arm task '" + s + "' (expected table or shelf)");
+  if (s == "hri") return ArmTask::Hri;
+  throw std::invalid_argument("unknown arm task '" + s + "' (expected table, shelf or hri)");
 }
 
 ArmSceneConfig default_arm_scene_config(ArmTask task) {
@@ -86,6 +89,15 @@ ArmSceneConfig default_arm_scene_config(ArmTask task) {
     // Object frame: x along the long side (world y), y towards the robot (world -x).
     c.goal_region = {{-0.55, 0.10, 0.70}, {0.35, 0.45, 0.95}};
     c.indicator_region = {{-0.75, -0.5, 0.625}, {0.75, 0.5, 1.2}};
+  } else if (task == ArmTask::Hri) {
+    // The shared table of the reference's HRI scene (4.4): box centre
+    // (0.8, -0.15, 0.4), half extents 0.4 (top at 0.8 m); object frame on the
+    // floor under its centre, axes as base_footprint. The goal region is the
+    // bounding box of the three target boxes (the env draws from the boxes).
+    c.position = {0.8, -0.15, 0.0};
+    c.yaw_deg = 0;
+    c.goal_region = {{-0.4, -0.25, 0.85}, {0.1, 0.45, 1.3}};
+    c.indicator_region = {{-0.4, -0.4, 0.8}, {0.4, 0.4, 1.4}};
   } else {
     // The authors' shelf, open side facing the robot (yaw 180), front face
     // 0.55 m in front of the base centre, standing on the floor (its frame is
@@ -141,6 +153,11 @@ ArmScene build_arm_scene(const ArmSceneConfig& c, const TiagoArmModel& m) {
       const Eigen::Vector3d ctr(xy[0].get<double>(), xy[1].get<double>(), lz);
       add_box({ctr - 0.5 * size, ctr + 0.5 * size}, "table_leg_" + std::to_string(i++));
     }
+  } else if (c.task == ArmTask::Hri) {
+    const json& t = ref.at("redsdf_hri_demo_table");
+    const Eigen::Vector3d half = read_vec3(t.at("half_extents"), "hri table half_extents");
+    const Eigen::Vector3d ctr = read_vec3(t.at("box_center"), "hri table box_center") - c.position;
+    add_box({ctr - half, ctr + half}, "hri_table");
   } else {
     for (const auto& [name, part] : ref.at("authors_shelf_model").at("parts").items())
       add_box({read_vec3(part.at("min"), name), read_vec3(part.at("max"), name)}, "shelf_" + name);
@@ -160,6 +177,12 @@ ArmScene build_arm_scene(const ArmSceneConfig& c, const TiagoArmModel& m) {
   s.goal_region = pl.box(c.goal_region);
   s.indicator_region = pl.box(c.indicator_region);
   return s;
+}
+
+void arm_object_placement(const ArmSceneConfig& config, Eigen::Matrix3d& R, Eigen::Vector3d& t) {
+  const Placement p = placement(config);
+  R = p.R;
+  t = p.t;
 }
 
 }  // namespace atacom

@@ -20,7 +20,7 @@
 
 namespace atacom {
 
-enum class ArmTask : uint8_t { Table = 0, Shelf = 1 };
+enum class ArmTask : uint8_t { Table = 0, Shelf = 1, Hri = 2 };
 std::string arm_task_name(ArmTask t);
 ArmTask parse_arm_task(const std::string& s);  // throws std::invalid_argument
 
@@ -48,7 +48,7 @@ void to_json(nlohmann::json& j, const ArmSceneConfig& c);
 void from_json(const nlohmann::json& j, ArmSceneConfig& c);  // unknown keys rejected
 
 struct ArmScene {
-  ShapeUnion obstacle;            // table or shelf boxes
+  ShapeUnion obstacle;            // table or shelf boxes (HRI: the shared table)
   ShapeUnion body;                // base cylinder, torso box, head sphere
   AlignedBox obstacle_bounds;     // box around every obstacle shape (broad phase)
   AlignedBox goal_region;         // base_footprint
@@ -56,5 +56,8 @@ struct ArmScene {
 };
 
 ArmScene build_arm_scene(const ArmSceneConfig& config, const TiagoArmModel& model);
+
+// Where the object frame sits: base_footprint point = R * object point + t.
+void arm_object_placement(const ArmSceneConfig& config, Eigen::Matrix3d& R, Eigen::Vector3d& t);
 
 }  // namespace atacom

@@ -5,13 +5,14 @@
 #include "cli/flag_checks.hpp"
 #include "cli/json_file.hpp"
 #include "src/core/limits.hpp"
+#include "envs/arm/arm_learned_sdf.hpp"
 #include "train/rollout.hpp"
 
 namespace {
 
 struct RolloutArgs {
   atacom::RolloutConfig cfg;
-  std::string atacom, safety, config_file, which = "final";
+  std::string atacom, safety, config_file, which = "final", sdf;
   CLI::Option *o_atacom = nullptr, *o_safety = nullptr;
 };
 
@@ -26,6 +27,12 @@ int run(RolloutArgs& a) {
     if (a.cfg.policy == "trained")
       throw std::invalid_argument("--config does not apply to --policy trained: the run's env config is used");
     a.cfg.env_config = atacom::cli::read_json_file(a.config_file);
+  }
+  if (!a.sdf.empty()) {
+    if (a.cfg.policy == "trained")
+      throw std::invalid_argument("--sdf does not apply to --policy trained: the run's env config is used");
+    if (a.cfg.env_config.is_null()) a.cfg.env_config = nlohmann::json::object();
+    a.cfg.env_config.merge_patch(atacom::sdf_flag_override(a.cfg.env, a.sdf));
   }
   if (a.which != "final" && a.cfg.policy != "trained")
     throw std::invalid_argument("--which applies to --policy trained only");
@@ -57,6 +64,8 @@ atacom::cli::RegisterCommand reg(
        atacom::cli::add_integer_flag(app, "--envs", a->cfg.envs, closed(1, lim::kMaxEnvs), "parallel envs");
        atacom::cli::add_integer_flag(app, "--seed", a->cfg.seed, atacom::cli::seed_range<uint64_t>(), "random seed");
        app.add_option("--config", a->config_file, "JSON file with env config overrides");
+       app.add_option("--sdf", a->sdf, "analytic | learned: the distance fields of every object with a shipped model")
+           ->check(CLI::IsMember({"analytic", "learned"}));
        return [a] {
          if (a->cfg.env.empty() && a->cfg.policy != "trained")
            throw std::invalid_argument("--env is required (unless --policy trained)");

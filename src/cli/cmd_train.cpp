@@ -10,6 +10,7 @@
 #include "atacom/trainer.hpp"
 #include "cli/command.hpp"
 #include "cli/flag_checks.hpp"
+#include "envs/arm/arm_learned_sdf.hpp"
 #include "cli/json_file.hpp"
 #include "src/core/limits.hpp"
 #include "train/algorithms.hpp"
@@ -18,7 +19,7 @@ namespace atacom::cli {
 namespace {
 
 struct TrainArgs {
-  std::string env, algo, config, out;
+  std::string env, algo, config, out, sdf;
   int64_t seed = 0, steps = 0;
   int envs = 0, eval_episodes = 0;
   bool resume = false;
@@ -37,6 +38,8 @@ int run(const TrainArgs& a) {
                                   "' holds no config.json, so there is no run to resume (start one without --resume)");
     if (!a.config.empty())
       throw std::invalid_argument("--config cannot be combined with --resume: the run's own config.json is used");
+    if (!a.sdf.empty())
+      throw std::invalid_argument("--sdf cannot be combined with --resume: the run's own config.json is used");
     rc = resolve_run_config(read_json_file(saved.string()));
     auto same = [](const CLI::Option* o, bool equal, const char* flag) {
       if (o && o->count() > 0 && !equal)
@@ -61,6 +64,13 @@ int run(const TrainArgs& a) {
     if (a.o_steps->count()) t["steps"] = a.steps;
     if (a.o_envs->count()) t["num_envs"] = a.envs;
     if (a.o_eval->count()) t["eval_episodes"] = a.eval_episodes;
+    if (!a.sdf.empty()) {
+      if (!t.contains("env") || !t["env"].is_string())
+        throw std::invalid_argument("--sdf needs the env named (--env or train.env in --config)");
+      nlohmann::json& e = file["env"];
+      if (e.is_null()) e = nlohmann::json::object();
+      e.merge_patch(sdf_flag_override(t["env"].get<std::string>(), a.sdf));
+    }
     rc = resolve_run_config(file);
   }
   TrainOptions opts;
@@ -99,6 +109,8 @@ const RegisterCommand reg{Command{
                                    "episodes per evaluation (default: train.eval_episodes)");
       for (CLI::Option* o : {a->o_seed, a->o_steps, a->o_envs, a->o_eval}) o->default_str("");
       app.add_option("--config", a->config, "JSON file with env/<learner>/train sections overriding the defaults");
+      app.add_option("--sdf", a->sdf, "analytic | learned: the distance fields of every object with a shipped model")
+          ->check(CLI::IsMember({"analytic", "learned"}));
       app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();
       app.add_flag("--resume", a->resume, "continue the run in --out from its last checkpoint");
       return [a]() { return run(*a); };

@@ -1,6 +1,7 @@
 // Render recorder of the manipulation envs: link capsules and PoI spheres
 // from the arm's FK at the observed joint angles, the obstacle and the robot
-// body from the env's scene, the goal and the approach axis.
+// body from the env's scene, the goal and the approach axis (HRI: the human's
+// capsules and the cup axis).
 #include <cmath>
 
 #include "envs/arm/arm_env.hpp"
@@ -56,6 +57,13 @@ class ArmRecorder final : public RenderRecorder {
       scene_.sphere_cls.push_back("poi");
     }
     scene_.axis_label = "approach axis";
+    if (env.hri()) {
+      for (int c = 0; c < kHumanCapsules; ++c) {
+        scene_.capsule_radius.push_back(env.human_model().capsules[size_t(c)].radius);
+        scene_.capsule_cls.push_back("human");
+      }
+      scene_.axis_label = "cup axis";
+    }
   }
 
   const RenderScene& scene() const override { return scene_; }
@@ -73,7 +81,11 @@ class ArmRecorder final : public RenderRecorder {
     }
     for (const Eigen::Vector3d& p : fk.poi) f.spheres.insert(f.spheres.end(), {p.x(), p.y(), p.z()});
     f.goal = {obs[7], obs[8], obs[9]};
-    const Eigen::Vector3d ax = fk.grasp.R.col(0);
+    if (env_.hri()) {  // env 0's human at the state this observation belongs to
+      const double* cap = env_.human_capsules_reached(0);
+      f.capsules.insert(f.capsules.end(), cap, cap + kHumanCapsules * 6);
+    }
+    const Eigen::Vector3d ax = env_.hri() ? Eigen::Vector3d(fk.grasp.R * env_.config().hri.cup_axis) : Eigen::Vector3d(fk.grasp.R.col(0));
     f.axis = {fk.grasp.p.x(), fk.grasp.p.y(), fk.grasp.p.z(), ax.x(), ax.y(), ax.z()};
     return f;
   }

@@ -1,0 +1,32 @@
+// Learned (ReDSDF) obstacle fields for the arm envs, resolved in one place:
+// the env config's "sdf" map and the `--sdf analytic|learned` flag of
+// `atacom rollout` / `atacom train`.
+//
+// A learned row keeps the analytic row's threshold plus the model's
+// `safety_margin` (manifest; the largest over-estimate of the distance seen on
+// its test split near the surface, rounded up), so d_learned >= delta + margin
+// implies d_exact >= delta wherever that bound holds (docs/sdf.md).
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "envs/arm/arm_scene.hpp"
+#include "kernels/redsdf_lanes.hpp"
+
+namespace atacom {
+
+// The field of the env's obstacle per `sdf` (null when analytic). Throws
+// std::invalid_argument for a key other than the env's object or a bad value,
+// std::runtime_error for a missing, corrupted or mismatched weight file.
+std::shared_ptr<LearnedObstacle> load_arm_learned_obstacle(const std::map<std::string, std::string>& sdf,
+                                                           const ArmSceneConfig& scene);
+
+// Env config override for `--sdf mode` on env `env`: {"sdf": {object: mode}}
+// for table and shelf; "analytic" on any other env is an empty override,
+// "learned" there is an error (no shipped model).
+nlohmann::json sdf_flag_override(const std::string& env, const std::string& mode);
+
+}  // namespace atacom

@@ -1,0 +1,28 @@
+// A learned obstacle field evaluated for lane blocks of the arm env: the
+// PoIs of kLanes envs (npoi x 3 lane vectors, base_footprint) go through the
+// batched network as one small batch on the calling thread.
+#pragma once
+#include <memory>
+
+#include <Eigen/Core>
+
+#include "kernels/lanes.hpp"
+#include "kernels/redsdf_batch.hpp"
+
+namespace atacom {
+
+struct LearnedObstacle {
+  std::shared_ptr<const RedsdfModel> model;
+  std::shared_ptr<RedsdfBatch> batch;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // object frame -> base_footprint rotation
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();      // object frame origin in base_footprint
+  double margin = 0.0;                              // added to every learned row's threshold, m
+};
+
+constexpr int kLearnedMaxPoi = 16;
+
+// d[i] (lanes) and g[i][0..2] (lanes) = grad_p d of point i, npoi <= kLearnedMaxPoi.
+void learned_distance_lanes(const LearnedObstacle& o, const lanes::vd (*poi)[3], int npoi, lanes::vd* d,
+                            lanes::vd (*g)[3]);
+
+}  // namespace atacom

@@ -1,0 +1,98 @@
+// atacom sdf-train: train a learned distance field (ReDSDF) of an object from
+// its exact geometry and write the weights with a manifest.
+#include <iostream>
+
+#include "cli/command.hpp"
+#include "cli/json_file.hpp"
+#include "train/redsdf_train.hpp"
+
+namespace {
+
+struct SdfTrainArgs {
+  std::string object, out, config_file, hidden;
+  int epochs = 0, patience = 0, surface_points = 0, batch = 0;
+  double budget_s = 0, lr = 0;
+  int64_t seed = -1, data_seed = -1;
+  bool quiet = false;
+  std::string argv_line;
+};
+
+std::vector<int> parse_widths(const std::string& s) {
+  std::vector<int> w;
+  size_t i = 0;
+  while (i < s.size()) {
+    size_t j = s.find(',', i);
+    if (j == std::string::npos) j = s.size();
+    try {
+      w.push_back(std::stoi(s.substr(i, j - i)));
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--hidden '" + s + "': expected comma-separated widths, e.g. 64,64,64,64");
+    }
+    i = j + 1;
+  }
+  return w;
+}
+
+int run(SdfTrainArgs& a) {
+  atacom::SdfTrainConfig c = atacom::default_sdf_train_config(a.object);
+  if (!a.config_file.empty()) {
+    nlohmann::json j = c;
+    j.merge_patch(atacom::cli::read_json_file(a.config_file));
+    c = j.get<atacom::SdfTrainConfig>();
+    if (c.object != a.object)
+      throw std::invalid_argument("--config sets object '" + c.object + "', but --object is " + a.object);
+  }
+  if (!a.hidden.empty()) {
+    c.arch.hidden = parse_widths(a.hidden);
+    c.arch.validate();
+  }
+  if (a.epochs > 0) c.max_epochs = a.epochs;
+  if (a.patience > 0) c.patience = a.patience;
+  if (a.surface_points > 0) c.data.surface_points = a.surface_points;
+  if (a.batch > 0) c.batch = a.batch;
+  if (a.budget_s > 0) c.budget_s = a.budget_s;
+  if (a.lr > 0) c.lr = a.lr;
+  if (a.seed >= 0) c.init_seed = uint64_t(a.seed);
+  if (a.data_seed >= 0) c.data.seed = uint64_t(a.data_seed);
+  const nlohmann::json man = atacom::train_sdf(c, a.out, a.argv_line, !a.quiet);
+  std::cout << nlohmann::json{{"object", c.object}, {"out", a.out}, {"stop", man.at("stop")},
+                              {"epochs", man.at("epochs")}, {"seconds", man.at("seconds")},
+                              {"test", man.at("metrics").at("test")}}
+                   .dump()
+            << std::endl;
+  return 0;
+}
+
+atacom::cli::RegisterCommand reg(
+    {"sdf-train", "train a learned signed distance field (ReDSDF) of an object from its exact geometry",
+     [](CLI::App& app) -> std::function<int()> {
+       auto a = std::make_shared<SdfTrainArgs>();
+       app.add_option("--object", a->object, "table | shelf | human | tiago")
+           ->required()
+           ->check(CLI::IsMember({"table", "shelf", "human", "tiago"}));
+       app.add_option("--out", a->out, "output directory (weights, manifest, progress.csv, learning curve)")->required();
+       app.add_option("--config", a->config_file, "JSON overrides of the training config (see docs/sdf.md)");
+       app.add_option("--hidden", a->hidden, "hidden widths, trunk first, e.g. 64,64,64,64");
+       app.add_option("--epochs", a->epochs, "most epochs")->check(CLI::PositiveNumber);
+       app.add_option("--patience", a->patience, "early-stopping patience, epochs")->check(CLI::PositiveNumber);
+       app.add_option("--surface-points", a->surface_points, "surface samples (each shifted by every epsilon)")
+           ->check(CLI::Range(1, 1 << 22));
+       app.add_option("--batch", a->batch, "batch size")->check(CLI::Range(16, 1 << 16));
+       app.add_option("--lr", a->lr, "initial Adam learning rate")->check(CLI::Range(1e-7, 1.0));
+       app.add_option("--budget-s", a->budget_s, "wall-clock limit of the epoch loop, s")->check(CLI::PositiveNumber);
+       app.add_option("--seed", a->seed, "weight init and batch order seed")->check(CLI::NonNegativeNumber);
+       app.add_option("--data-seed", a->data_seed, "data sampling seed")->check(CLI::NonNegativeNumber);
+       app.add_flag("--quiet", a->quiet, "no progress lines");
+       return [a, &app] {
+         // The command as given (recorded in the manifest).
+         std::string line = "atacom sdf-train";
+         for (const CLI::Option* o : app.get_options())
+           if (o->count() && o->get_name() != "--help")
+             for (const std::string& v : o->as<std::vector<std::string>>())
+               line += " " + o->get_name() + (o->get_expected_min() == 0 ? "" : " " + v);
+         a->argv_line = line;
+         return run(*a);
+       };
+     }});
+
+}  // namespace
