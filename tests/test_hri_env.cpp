@@ -264,3 +264,50 @@ TEST_CASE("hri: random alpha through ATACOM on held-out motion: 20x fewer human 
   CHECK(other[1] == 0);
   CHECK(max_excess <= 0.0);
 }
+
+// The person does not avoid the robot and can corner the arm against a
+// joint limit with the cup upright: then no action inside the box corrects
+// every row (the projector reports atacom_bias_out) and a human row can leave
+// its tolerance. Measured: 1 human contact in 768k training-motion steps
+// (seeds 5-7), none on held-out motion; never a static collision or a spill.
+TEST_CASE("hri: 1.5M steps of random alpha through ATACOM on both motion splits: rows leave tolerance only when infeasible",
+          "[hri][slow]") {
+  long human_total = 0;
+  for (const char* split : {"train", "test"})
+    for (uint64_t seed : {5u, 6u, 7u}) {
+      const int N = 512, steps = 500;
+      auto env = make_env({"hri", N, SafetyLayer::Atacom, {{"hri", {{"split", split}}}}});
+      env->seed(seed);
+      const EnvSpec& s = env->spec();
+      const int ni = int(s.info_names.size());
+      auto col = [&](const char* name) {
+        return int(std::find(s.info_names.begin(), s.info_names.end(), name) - s.info_names.begin());
+      };
+      const int col_c = col("collision"), col_h = col("human_collision"), col_s = col("spill"), col_b = col("atacom_bias_out");
+      Rng rng(seed + 100, 0);
+      long static_hits = 0, human = 0, spills = 0, over_feasible = 0, over = 0;
+      for (int t = 0; t < steps; ++t) {
+        env->step(random_actions(rng, N).data());
+        const EnvBuffers& b = env->buffers();
+        for (int i = 0; i < N; ++i) {
+          const float* info = &b.info[size_t(i) * ni];
+          human += info[col_h] > 0;
+          static_hits += info[col_c] > 0 && !(info[col_h] > 0);
+          spills += info[col_s] > 0;
+          bool row_over = false;
+          for (int r = 0; r < s.num_constraints; ++r)
+            row_over = row_over || b.constraints[size_t(i) * s.num_constraints + r] > s.constraint_tolerance[size_t(r)];
+          over += row_over;
+          over_feasible += row_over && !(info[col_b] > 0);
+        }
+      }
+      INFO(split << " seed " << seed << ": human " << human << " static " << static_hits << " spills " << spills
+                 << " steps over tolerance " << over << " (feasible " << over_feasible << ")");
+      CHECK(static_hits == 0);
+      CHECK(spills == 0);
+      CHECK(over_feasible == 0);
+      if (std::string(split) == "test") CHECK(human == 0);
+      human_total += human;
+    }
+  CHECK(human_total <= 3);  // <= 1 per 512 episodes
+}
