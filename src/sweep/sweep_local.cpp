@@ -164,19 +164,20 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     else *opts.log << b << "\n" << std::flush;
   };
 
-  auto launch = [&](size_t k) -> bool {
+  enum class Launch { Started, Done, Held };
+  auto launch = [&](size_t k) -> Launch {
     const SweepCell& c = cells[k];
     const std::string lock = cell_state_path(dir, c, ".lock");
     const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0) throw std::runtime_error("cannot open lock file '" + lock + "': " + std::strerror(errno));
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {  // another sweep process runs it
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {  // another process runs it (or a run of a killed sweep is dying)
       ::close(fd);
-      return false;
+      return Launch::Held;
     }
     const std::string st = run_files_state(dir, c);  // again, under the lock
     if (st == "done") {
       ::close(fd);
-      return false;
+      return Launch::Done;
     }
     const fs::path run = fs::path(dir) / c.run_dir();
     if (st == "fresh" && fs::exists(run)) fs::remove_all(run);  // nothing to resume: start clean
@@ -197,6 +198,8 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
       // The run dies with the sweep (kill -9 included): no orphan keeps writing a cell the next sweep resumes.
       ::prctl(PR_SET_PDEATHSIG, SIGKILL);
       if (::getppid() != me) ::_exit(137);
+      // The run holds the cell's lock too, until it is really gone.
+      ::fcntl(fd, F_SETFD, 0);
       ::dup2(log_fd, STDOUT_FILENO);
       ::dup2(log_fd, STDERR_FILENO);
       std::vector<char*> argv;
@@ -210,7 +213,7 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     write_cell_state(dir, c, {{"state", "running"}, {"attempts", attempts}, {"host", hostname()}, {"pid", pid},
                               {"resumed", st == "partial"}, {"started_utc", utc_now()}});
     running.push_back({k, pid, fd, attempts});
-    return true;
+    return Launch::Started;
   };
 
   auto reap = [&](bool block) {
@@ -249,9 +252,16 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   progress(true);
   while ((next < queue.size() || !running.empty()) && g_stop_signal.load() == 0) {
     bool changed = false;
-    while (int(running.size()) < jobs && next < queue.size() && g_stop_signal.load() == 0) {
-      changed |= launch(queue[next]);
+    size_t held = 0;  // cells locked by another process: retried until it is done with them
+    while (int(running.size()) < jobs && next < queue.size() && g_stop_signal.load() == 0 && held < queue.size()) {
+      const Launch l = launch(queue[next]);
+      changed |= l == Launch::Started;
+      if (l == Launch::Held) {
+        queue.push_back(queue[next]);
+        ++held;
+      }
       ++next;
+      if (l == Launch::Held && next + held >= queue.size()) break;  // only held cells left: wait a little
     }
     if (changed) write_sweep_json(dir, cells);
     std::this_thread::sleep_for(std::chrono::milliseconds(100));

@@ -3,6 +3,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "atacom/learner.hpp"
 #include "atacom/trainer.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
@@ -117,16 +118,25 @@ std::vector<SweepCell> sweep_cells(const SweepSpec& s) {
   std::vector<SweepCell> out;
   for (const auto& env : s.envs)
     for (const auto& algo : s.algos) {
+      const Algorithm& a = find_algorithm(algo);
       nlohmann::json base = nlohmann::json::object();
-      for (const std::string& key : {std::string("*/*"), env + "/*", "*/" + algo, env + "/" + algo})
-        if (s.overrides.contains(key)) merge_into(base, s.overrides.at(key));
+      for (const std::string& key : {std::string("*/*"), env + "/*", "*/" + algo, env + "/" + algo}) {
+        if (!s.overrides.contains(key)) continue;
+        nlohmann::json o = s.overrides.at(key);
+        // A wildcard's learner sections reach the cells that train that learner only
+        // ("*/*": {"sac": ...} beside la runs); an exact "<env>/<algo>" key must fit its cell.
+        if (key.find('*') != std::string::npos)
+          for (const LearnerEntry& le : learner_entries())
+            if (le.name != a.learner) o.erase(le.section);
+        merge_into(base, o);
+      }
       for (int64_t seed : s.seeds) {
         SweepCell c;
         c.env = env;
         c.algo = algo;
         c.seed = seed;
         c.steps = s.steps;
-        c.learns = find_algorithm(algo).learns();
+        c.learns = a.learns();
         c.config = base;
         nlohmann::json& t = c.config["train"];
         if (t.is_null()) t = nlohmann::json::object();

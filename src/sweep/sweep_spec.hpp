@@ -11,6 +11,8 @@
 // An override key is "<env>/<algo>", either part "*"; its value is a run
 // config fragment (sections env, train, sac, ...) merged into the cell's
 // config, least specific first: "*/*", "<env>/*", "*/<algo>", "<env>/<algo>".
+// A wildcard key's learner sections ("sac", ...) reach only the cells whose
+// algorithm trains that learner; an exact key's must fit its cell.
 // train.env/algo/seed/steps/num_envs come from the spec only. Every cell is
 // resolved when the spec is read, so a bad override fails before any run.
 #pragma once
