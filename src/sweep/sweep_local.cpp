@@ -99,7 +99,10 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
         *opts.log << cells[k].name() << "  " << (st == "fresh" ? "to run" : st == "partial" ? "to resume" : "done");
         if (st != "done") {
           *opts.log << "  ";
-          for (const auto& s : command(cells[k], st == "partial")) *opts.log << " " << s;
+          std::vector<std::string> cmd = command(cells[k], st == "partial");
+          std::error_code ec;
+          if (cmd[0] == "/proc/self/exe") cmd[0] = fs::read_symlink(cmd[0], ec).string();  // the binary it names
+          for (const auto& s : cmd) *opts.log << " " << s;
         }
         *opts.log << "\n";
       }
