@@ -29,12 +29,20 @@ jobs=$(nproc 2>/dev/null || echo 2)
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$jobs"
 
-# The main job on its built-in default: ATACOM-SAC on TableEnv (TIAGo arm
-# reaching above a table under 34 constraints), 20k env steps, 4 envs,
-# about 20 s on 2 cores. Each run gets its own directory; nothing is overwritten.
-run="runs/table-atacom-sac-$(date +%Y%m%d-%H%M%S)"
-./build/atacom train --env table --algo atacom-sac --seed 0 --steps 20000 --envs 4 --out "$run" > /dev/null
-echo "setup: main job done; results in $run (summary.json, progress.csv, progress.svg)"
-grep -o '"\(eval_return_mean\|final_distance\|early_terminations\|train_collisions\|train_violations\)":[^,}]*' \
-  "$run/summary.json" | tr '\n' ' '
-echo
+# The main job: a small sweep and its report (configs/sweeps/readme.json):
+# ATACOM-SAC and SAC on TableEnv (TIAGo arm reaching above a table under 34
+# constraints), one seed, 20k env steps with 4 envs each, an evaluation every
+# 1000 steps; about a minute on 2 cores. Each sweep gets its own directory;
+# nothing is overwritten.
+sweep="runs/main-$(date +%Y%m%d-%H%M%S)"
+./build/atacom sweep configs/sweeps/readme.json --out "$sweep"
+./build/atacom report "$sweep" > /dev/null
+echo "setup: main job done; report: $PWD/$sweep/report/index.html"
+# The two runs side by side (from report/summary.csv; one seed, so the IQM is the value).
+awk -F, 'NR > 1 && $1 == "table" { v[$2, $3] = $10 }
+  END {
+    printf "%-11s %17s %19s %19s\n", "algo", "train collisions", "early terminations", "final distance [m]"
+    n = split("atacom-sac sac", a, " ")
+    for (i = 1; i <= n; ++i)
+      printf "%-11s %17g %19g %19.3f\n", a[i], v[a[i], "train_collisions"], v[a[i], "train_terminations"], v[a[i], "final_distance"]
+  }' "$sweep/report/summary.csv"

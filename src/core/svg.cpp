@@ -69,6 +69,13 @@ void SvgCanvas::circle(double x, double y, double r_data, const std::string& fil
            "\" stroke=\"" + stroke + "\" fill-opacity=\"" + num(opacity) + "\"/>\n";
 }
 
+void SvgCanvas::polygon(const std::vector<std::pair<double, double>>& pts, const std::string& fill, double opacity) {
+  if (pts.empty()) return;
+  std::string p;
+  for (const auto& [x, y] : pts) p += num(px(x)) + "," + num(py(y)) + " ";
+  body_ += "<polygon fill=\"" + fill + "\" fill-opacity=\"" + num(opacity) + "\" stroke=\"none\" points=\"" + p + "\"/>\n";
+}
+
 void SvgCanvas::rect(double xa, double ya, double xb, double yb, const std::string& fill, const std::string& stroke) {
   const double l = std::min(px(xa), px(xb)), t = std::min(py(ya), py(yb));
   body_ += "<rect x=\"" + num(l) + "\" y=\"" + num(t) + "\" width=\"" + num(std::abs(px(xb) - px(xa))) +
@@ -88,21 +95,70 @@ void SvgCanvas::label(double x, double y, const std::string& s, double size, con
            "</text>\n";
 }
 
+std::vector<double> nice_ticks(double lo, double hi, int target) {
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return {lo};
+  const double raw = (hi - lo) / std::max(1, target);
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = mag;
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * mag >= raw) {
+      step = m * mag;
+      break;
+    }
+  std::vector<double> out;
+  for (double k = std::ceil(lo / step - 1e-9); k * step <= hi + step * 1e-9; k += 1) {
+    const double v = k * step;
+    out.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
+  }
+  return out;
+}
+
+std::vector<std::string> format_ticks(const std::vector<double>& ticks) {
+  double big = 0;
+  for (double v : ticks) big = std::max(big, std::abs(v));
+  const double unit = big >= 1e6 ? 1e6 : big >= 1e4 ? 1e3 : 1.0;
+  const char* suffix = unit == 1e6 ? "M" : unit == 1e3 ? "k" : "";
+  int decimals = 0;
+  for (; decimals < 6; ++decimals) {
+    const double p = std::pow(10.0, decimals);
+    bool exact = true;
+    for (double v : ticks) {
+      const double x = v / unit * p;
+      exact = exact && std::abs(x - std::round(x)) < 1e-6 * std::max(1.0, std::abs(x));
+    }
+    if (exact) break;
+  }
+  std::vector<std::string> out;
+  for (double v : ticks) {
+    char buf[48];
+    const double x = v / unit;
+    std::snprintf(buf, sizeof(buf), "%.*f%s", decimals, std::abs(x) < 1e-12 ? 0.0 : x, x == 0 ? "" : suffix);
+    out.push_back(buf);
+  }
+  return out;
+}
+
+void SvgCanvas::y_axis(const std::string& ylabel, int yticks) {
+  line(x0_, y0_, x0_, y1_, "#444");
+  const std::vector<double> ty = nice_ticks(y0_, y1_, yticks);
+  const std::vector<std::string> ly = format_ticks(ty);
+  for (size_t i = 0; i < ty.size(); ++i) {
+    line(x0_, ty[i], x1_, ty[i], "#ddd", 0.5);
+    label(px(x0_) - 4, py(ty[i]) + 3, ly[i], 10, "end");
+  }
+  label(12, (py(y0_) + py(y1_)) / 2, ylabel, 12, "middle", "#222", true);
+}
+
 void SvgCanvas::axes(const std::string& xlabel, const std::string& ylabel, int xticks, int yticks) {
   line(x0_, y0_, x1_, y0_, "#444");
-  line(x0_, y0_, x0_, y1_, "#444");
-  for (int i = 0; i <= xticks; ++i) {
-    const double x = x0_ + (x1_ - x0_) * i / xticks;
-    line(x, y0_, x, y1_, "#ddd", 0.5);
-    label(px(x), py(y0_) + 14, format_tick(x), 10, "middle");
+  const std::vector<double> tx = nice_ticks(x0_, x1_, xticks);
+  const std::vector<std::string> lx = format_ticks(tx);
+  for (size_t i = 0; i < tx.size(); ++i) {
+    line(tx[i], y0_, tx[i], y1_, "#ddd", 0.5);
+    label(px(tx[i]), py(y0_) + 14, lx[i], 10, "middle");
   }
-  for (int i = 0; i <= yticks; ++i) {
-    const double y = y0_ + (y1_ - y0_) * i / yticks;
-    line(x0_, y, x1_, y, "#ddd", 0.5);
-    label(px(x0_) - 4, py(y) + 3, format_tick(y), 10, "end");
-  }
+  y_axis(ylabel, yticks);
   label((px(x0_) + px(x1_)) / 2, h_ - 6, xlabel, 12, "middle");
-  label(12, (py(y0_) + py(y1_)) / 2, ylabel, 12, "middle", "#222", true);
 }
 
 std::string SvgCanvas::str() const {

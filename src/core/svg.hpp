@@ -19,6 +19,8 @@ class SvgCanvas {
                 double opacity = 1.0);
   void circle(double x, double y, double r_data, const std::string& fill, const std::string& stroke = "none",
               double opacity = 1.0);
+  // A filled polygon (bands).
+  void polygon(const std::vector<std::pair<double, double>>& pts, const std::string& fill, double opacity = 0.25);
   void rect(double xa, double ya, double xb, double yb, const std::string& fill, const std::string& stroke = "none");
   // Text at data coordinates (anchor: start | middle | end).
   void text(double x, double y, const std::string& s, double size = 12, const std::string& anchor = "start",
@@ -26,8 +28,12 @@ class SvgCanvas {
   // Text at pixel coordinates of the whole image.
   void label(double px, double py, const std::string& s, double size = 12, const std::string& anchor = "start",
              const std::string& color = "#222", bool rotate = false);
-  // Axes with ticks along the plot area's left and bottom edges.
+  // Axes with ticks along the plot area's left and bottom edges: about
+  // xticks / yticks round values (steps 1, 2 or 5 x 10^k), labelled alike
+  // along each axis (format_ticks).
   void axes(const std::string& xlabel, const std::string& ylabel, int xticks = 5, int yticks = 5);
+  // The left axis alone (for category plots, which label x themselves).
+  void y_axis(const std::string& ylabel, int yticks = 5);
 
   std::string str() const;
   // Atomic write (temp file + rename); throws std::runtime_error on failure.
@@ -43,6 +49,12 @@ class SvgCanvas {
 
 // Nice-looking tick value formatting (trims zeros, uses k/M suffixes for large values).
 std::string format_tick(double v);
+// Round tick values inside [lo, hi], about `target` of them: multiples of 1, 2 or 5 x 10^k.
+std::vector<double> nice_ticks(double lo, double hi, int target);
+// Labels for the ticks of one axis, formatted alike: one unit for all (k or
+// M from the largest magnitude) and the same number of decimals
+// ("0, 4k, 8k, 12k", never "4000, 8000, 12k").
+std::vector<std::string> format_ticks(const std::vector<double>& ticks);
 // XML-escape a string for SVG text.
 std::string svg_escape(const std::string& s);
 

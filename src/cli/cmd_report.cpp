@@ -1,0 +1,31 @@
+// atacom report DIR: statistics, figures and an HTML page of a sweep (src/report/).
+#include <iostream>
+
+#include "cli/command.hpp"
+#include "src/report/report.hpp"
+
+namespace atacom::cli {
+namespace {
+
+const RegisterCommand reg{Command{
+    "report", "statistics (IQM, bootstrap intervals, P(improvement)), figures and index.html of a sweep directory",
+    [](CLI::App& app) -> std::function<int()> {
+      auto o = std::make_shared<ReportOptions>();
+      app.add_option("DIR", o->dir, "sweep directory (atacom sweep --out)")->required();
+      app.add_option("--resamples", o->resamples, "bootstrap resamples of the tables' intervals")
+          ->check(CLI::Range(100, 1000000));
+      app.add_option("--curve-resamples", o->curve_resamples, "bootstrap resamples per learning-curve point")
+          ->check(CLI::Range(10, 100000));
+      app.add_option("--bootstrap-seed", o->seed, "bootstrap seed");
+      return [o]() {
+        const ReportResult r = write_report(*o);
+        std::cout << "report: " << r.finished << " of " << r.runs << " runs finished";
+        if (!r.missing.empty()) std::cout << " (" << r.missing.size() << " missing or failed: listed in the report)";
+        if (!r.dropped.empty()) std::cout << "; " << r.dropped.size() << " runs ended far below their best evaluation";
+        std::cout << "\n" << r.index_html << "\n";
+        return 0;
+      };
+    }}};
+
+}  // namespace
+}  // namespace atacom::cli

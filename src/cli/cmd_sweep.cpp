@@ -1,0 +1,66 @@
+// atacom sweep: every (env, algo, seed) cell of a spec as an `atacom train`
+// run, locally (K at a time) or as a Slurm job array; `atacom sweep status`.
+#include <unistd.h>
+
+#include <iostream>
+
+#include "cli/command.hpp"
+#include "src/core/config_json.hpp"
+#include "src/sweep/sweep_local.hpp"
+#include "src/sweep/sweep_spec.hpp"
+#include "src/sweep/sweep_state.hpp"
+
+namespace atacom::cli {
+namespace {
+
+struct SweepArgs {
+  std::string spec, out, shard = "0/1", status_dir;
+  int jobs = 0, threads_per_run = 0;
+  bool dry_run = false;
+  CLI::App* status = nullptr;
+};
+
+int run_status(const std::string& dir) {
+  const SweepSpec spec = load_sweep_spec(dir);
+  const nlohmann::json table = sweep_table(dir, sweep_cells(spec));
+  std::cout << sweep_status_text(table);
+  for (const auto& r : table.at("runs"))
+    if (r.at("state") != "done") return 1;
+  return 0;
+}
+
+int run(const SweepArgs& a) {
+  if (a.status->parsed()) return run_status(a.status_dir);
+  if (a.spec.empty()) throw std::invalid_argument("atacom sweep: SPEC (a sweep spec JSON file) is required");
+  if (a.out.empty()) throw std::invalid_argument("atacom sweep: --out DIR is required");
+  const SweepSpec spec = parse_sweep_spec(atacom::read_json_file(a.spec, "sweep spec"));
+  SweepLocalOptions o;
+  o.dir = a.out;
+  o.jobs = a.jobs;
+  o.threads_per_run = a.threads_per_run;
+  o.shard = parse_shard(a.shard);
+  o.dry_run = a.dry_run;
+  o.log = a.dry_run ? &std::cout : &std::cerr;
+  o.log_is_tty = !a.dry_run && ::isatty(STDERR_FILENO) != 0;
+  return run_sweep_local(spec, o);
+}
+
+const RegisterCommand reg{Command{
+    "sweep", "run every (env, algo, seed) cell of a sweep spec as an `atacom train` run (resumable); `sweep status DIR`",
+    [](CLI::App& app) -> std::function<int()> {
+      auto a = std::make_shared<SweepArgs>();
+      app.add_option("SPEC", a->spec, "sweep spec (JSON: envs, algos, seeds, steps, num_envs, overrides)");
+      app.add_option("--out", a->out, "sweep directory (runs/, logs/, sweep.json; reuse it to resume)");
+      app.add_option("--jobs", a->jobs, "runs at a time (default: one per core)")->check(CLI::Range(1, 4096));
+      app.add_option("--threads-per-run", a->threads_per_run, "worker threads of each run (default: cores / jobs)")
+          ->check(CLI::Range(1, 4096));
+      app.add_option("--shard", a->shard, "run only part i of n (cells k with k mod n = i), e.g. 0/4");
+      app.add_flag("--dry-run", a->dry_run, "list the runs (and their commands) without running anything");
+      a->status = app.add_subcommand("status", "print the state of every run of a sweep directory");
+      a->status->add_option("DIR", a->status_dir, "sweep directory")->required();
+      app.require_subcommand(0, 1);
+      return [a]() { return run(*a); };
+    }}};
+
+}  // namespace
+}  // namespace atacom::cli

@@ -1,0 +1,273 @@
+// atacom report: tables (CSV, Markdown), figures (SVG) and one HTML page.
+#include "src/report/report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+#include "src/core/fs_util.hpp"
+#include "src/core/svg.hpp"
+#include "src/report/report_data.hpp"
+#include "src/report/report_stats.hpp"
+
+namespace fs = std::filesystem;
+
+namespace atacom {
+
+namespace {
+
+constexpr const char* kMain = "atacom-sac";  // the algorithm whose improvement on each baseline is reported
+
+std::string num(double v) {
+  if (std::isnan(v)) return "nan";
+  char b[40];
+  std::snprintf(b, sizeof(b), "%.12g", v);
+  return b;
+}
+std::string short_num(double v) {
+  if (std::isnan(v)) return "-";
+  char b[40];
+  std::snprintf(b, sizeof(b), "%.4g", v);
+  return b;
+}
+std::string html_escape(const std::string& s) { return svg_escape(s); }
+
+struct Row {
+  std::string env, algo, metric;
+  size_t n = 0;
+  double mean = NAN, std = NAN, median = NAN, q1 = NAN, q3 = NAN, iqm = NAN;
+  Interval ci{NAN, NAN};
+};
+
+struct Pi {
+  std::string env, metric, baseline;
+  size_t nx = 0, ny = 0;
+  double p = NAN;
+};
+
+struct Drop {
+  const ReportRun* run;
+  double final_ret, best_ret, best_steps, final_dist, best_dist;
+  bool dropped;
+};
+
+std::vector<Row> table_rows(const ReportData& d) {
+  std::vector<Row> rows;
+  for (const auto& env : d.envs)
+    for (const auto& algo : d.algos)
+      for (const ReportMetric& m : report_metrics()) {
+        const std::vector<double> v = metric_values(d, env, algo, m.key);
+        if (v.empty()) continue;
+        Row r{env, algo, m.key};
+        r.n = v.size();
+        r.mean = mean_of(v);
+        r.std = sample_std(v);
+        r.median = quantile(v, 0.5);
+        r.q1 = quantile(v, 0.25);
+        r.q3 = quantile(v, 0.75);
+        r.iqm = iqm(v);
+        r.ci = bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream(env + "/" + algo + "/" + m.key));
+        rows.push_back(r);
+      }
+  return rows;
+}
+
+std::vector<Pi> improvements(const ReportData& d) {
+  std::vector<Pi> out;
+  bool has_main = false;
+  for (const auto& a : d.algos) has_main = has_main || a == kMain;
+  if (!has_main) return out;
+  for (const auto& env : d.envs)
+    for (const auto& base : d.algos) {
+      if (base == kMain) continue;
+      for (const ReportMetric& m : report_metrics()) {
+        if (!m.boxplot) continue;
+        const std::vector<double> x = metric_values(d, env, kMain, m.key), y = metric_values(d, env, base, m.key);
+        if (x.empty() || y.empty()) continue;
+        out.push_back({env, m.key, base, x.size(), y.size(), probability_of_improvement(x, y, m.higher_better)});
+      }
+    }
+  return out;
+}
+
+std::vector<Drop> drops(const ReportData& d) {
+  std::vector<Drop> out;
+  for (const ReportRun& r : d.runs) {
+    if (!r.finished) continue;
+    Drop x{&r, NAN, NAN, NAN, NAN, NAN, false};
+    x.final_ret = metric_value(r.summary, "eval_return_mean").value_or(NAN);
+    x.best_ret = metric_value(r.summary, "best.eval_return_mean").value_or(NAN);
+    x.best_steps = metric_value(r.summary, "best.env_steps").value_or(NAN);
+    x.final_dist = metric_value(r.summary, "final_distance").value_or(NAN);
+    x.best_dist = metric_value(r.summary, "best.final_distance").value_or(NAN);
+    x.dropped = (x.final_ret < x.best_ret - d.opts.drop_return_frac * std::abs(x.best_ret)) ||
+                (x.final_dist > x.best_dist + d.opts.drop_distance);
+    out.push_back(x);
+  }
+  return out;
+}
+
+const ReportMetric& metric_info(const std::string& key) {
+  for (const ReportMetric& m : report_metrics())
+    if (key == m.key) return m;
+  throw std::logic_error("unknown report metric " + key);
+}
+
+std::string methods_text(const ReportData& d) {
+  return "Statistics over seeds per (env, algo): mean, sample std (n - 1), median and quartiles (linear "
+         "interpolation, numpy's default), IQM = 25%-trimmed mean, its 95% percentile-bootstrap interval (" +
+         std::to_string(d.opts.resamples) + " resamples of the seeds with replacement, seed " +
+         std::to_string(d.opts.seed) + "; one task per cell, so stratified = within the cell; curves: " +
+         std::to_string(d.opts.curve_resamples) +
+         " resamples per evaluation). P(improvement) of atacom-sac over a baseline: Mann-Whitney form, over all "
+         "seed pairs 1 if atacom-sac is better, 1/2 if equal. Final-policy metrics are the last evaluation; "
+         "training metrics count over all training steps. A run is flagged when its final evaluation return is "
+         "more than " + short_num(100 * d.opts.drop_return_frac) + "% of |best| below its best evaluation's, or its "
+         "final distance more than " + short_num(d.opts.drop_distance) + " m above.";
+}
+
+}  // namespace
+
+ReportResult write_report(const ReportOptions& opts) {
+  const ReportData d = load_report_data(opts);
+  ReportResult res;
+  res.report_dir = (fs::path(opts.dir) / "report").string();
+  res.index_html = (fs::path(res.report_dir) / "index.html").string();
+  res.runs = int(d.runs.size());
+  for (const ReportRun& r : d.runs) {
+    res.finished += r.finished;
+    if (!r.finished) res.missing.push_back(r.cell.name());
+  }
+  if (res.finished == 0)
+    throw std::invalid_argument("sweep directory '" + opts.dir + "' holds no finished run yet (see `atacom sweep status " +
+                                opts.dir + "`)");
+  fs::create_directories(res.report_dir);
+  const auto out = [&](const std::string& name) { return (fs::path(res.report_dir) / name).string(); };
+
+  const std::vector<Row> rows = table_rows(d);
+  const std::vector<Pi> pis = improvements(d);
+  const std::vector<Drop> dr = drops(d);
+  for (const Drop& x : dr)
+    if (x.dropped) res.dropped.push_back(x.run->cell.name());
+
+  // ---- CSV
+  std::string csv = "env,algo,metric,n,mean,std,median,q1,q3,iqm,iqm_ci_low,iqm_ci_high\n";
+  for (const Row& r : rows)
+    csv += r.env + "," + r.algo + "," + r.metric + "," + std::to_string(r.n) + "," + num(r.mean) + "," + num(r.std) +
+           "," + num(r.median) + "," + num(r.q1) + "," + num(r.q3) + "," + num(r.iqm) + "," + num(r.ci.low) + "," +
+           num(r.ci.high) + "\n";
+  write_file_atomic(out("summary.csv"), csv);
+  std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement\n";
+  for (const Pi& p : pis)
+    pcsv += p.env + "," + p.metric + "," + kMain + "," + p.baseline + "," + std::to_string(p.nx) + "," +
+            std::to_string(p.ny) + "," + num(p.p) + "\n";
+  write_file_atomic(out("prob_improvement.csv"), pcsv);
+  std::string fcsv = "env,algo,seed,final_return,best_return,best_env_steps,final_distance,best_final_distance,drop\n";
+  for (const Drop& x : dr)
+    fcsv += x.run->cell.env + "," + x.run->cell.algo + "," + std::to_string(x.run->cell.seed) + "," + num(x.final_ret) +
+            "," + num(x.best_ret) + "," + num(x.best_steps) + "," + num(x.final_dist) + "," + num(x.best_dist) + "," +
+            (x.dropped ? "1" : "0") + "\n";
+  write_file_atomic(out("final_vs_best.csv"), fcsv);
+  std::string mcsv = "env,algo,seed,state,log\n";
+  for (const ReportRun& r : d.runs)
+    if (!r.finished)
+      mcsv += r.cell.env + "," + r.cell.algo + "," + std::to_string(r.cell.seed) + "," + r.state + "," + r.log + "\n";
+  write_file_atomic(out("missing.csv"), mcsv);
+
+  // ---- figures
+  std::vector<std::pair<std::string, std::string>> figs;  // file, svg
+  for (const auto& env : d.envs) {
+    figs.emplace_back("box_" + env + ".svg", boxplot_svg(d, env));
+    figs.emplace_back("curves_" + env + ".svg", curves_svg(d, env));
+  }
+  for (const auto& [f, svg] : figs) write_file_atomic(out(f), svg);
+
+  // ---- Markdown and HTML, side by side
+  std::ostringstream md, html;
+  md << "# Sweep report: " << opts.dir << "\n\n" << res.finished << " of " << res.runs << " runs finished.\n\n"
+     << methods_text(d) << "\n\n";
+  html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>atacom sweep report</title>\n<style>"
+          "body{font-family:sans-serif;margin:20px;color:#222}table{border-collapse:collapse;margin:8px 0 20px}"
+          "td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:right}th{background:#f3f3f3}"
+          "td.l{text-align:left}.bad{background:#fdd}.good{background:#dfd}svg{max-width:100%;height:auto}"
+          "p.note{max-width:60em;font-size:13px}</style></head><body>\n"
+       << "<h1>Sweep report</h1><p>" << html_escape(opts.dir) << ": " << res.finished << " of " << res.runs
+       << " runs finished.</p><p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
+  for (const auto& env : d.envs) {
+    md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n";
+    html << "<h2>" << html_escape(env) << "</h2>\n";
+    for (const auto& [f, svg] : figs)
+      if (f == "box_" + env + ".svg" || f == "curves_" + env + ".svg") html << "<div>" << svg << "</div>\n";
+    md << "| algo | metric | n | IQM [95% CI] | mean +- std | median [q1, q3] |\n|---|---|---|---|---|---|\n";
+    html << "<table><tr><th>algo</th><th>metric</th><th>n</th><th>IQM [95% CI]</th><th>mean &plusmn; std</th>"
+            "<th>median [q1, q3]</th></tr>\n";
+    for (const Row& r : rows) {
+      if (r.env != env) continue;
+      const std::string iq = short_num(r.iqm) + " [" + short_num(r.ci.low) + ", " + short_num(r.ci.high) + "]";
+      const std::string ms = short_num(r.mean) + " +- " + short_num(r.std);
+      const std::string mq = short_num(r.median) + " [" + short_num(r.q1) + ", " + short_num(r.q3) + "]";
+      md << "| " << r.algo << " | " << r.metric << " | " << r.n << " | " << iq << " | " << ms << " | " << mq << " |\n";
+      html << "<tr><td class=\"l\">" << r.algo << "</td><td class=\"l\">" << r.metric << "</td><td>" << r.n
+           << "</td><td>" << iq << "</td><td>" << short_num(r.mean) << " &plusmn; " << short_num(r.std) << "</td><td>"
+           << mq << "</td></tr>\n";
+    }
+    md << "\n";
+    html << "</table>\n";
+    bool any = false;
+    for (const Pi& p : pis) any = any || p.env == env;
+    if (any) {
+      md << "P(atacom-sac improves on the baseline):\n\n| baseline | metric | n | P(improvement) |\n|---|---|---|---|\n";
+      html << "<h3>P(atacom-sac improves on the baseline)</h3><table><tr><th>baseline</th><th>metric</th>"
+              "<th>n (atacom-sac, baseline)</th><th>P(improvement)</th></tr>\n";
+      for (const Pi& p : pis) {
+        if (p.env != env) continue;
+        md << "| " << p.baseline << " | " << p.metric << " (" << (metric_info(p.metric).higher_better ? "higher" : "lower")
+           << " is better) | " << p.nx << ", " << p.ny << " | " << short_num(p.p) << " |\n";
+        html << "<tr><td class=\"l\">" << p.baseline << "</td><td class=\"l\">" << p.metric << "</td><td>" << p.nx
+             << ", " << p.ny << "</td><td class=\"" << (p.p > 0.5 ? "good" : p.p < 0.5 ? "bad" : "") << "\">"
+             << short_num(p.p) << "</td></tr>\n";
+      }
+      md << "\n";
+      html << "</table>\n";
+    }
+  }
+  md << "## Final vs best evaluation\n\n| run | final return | best return (at env steps) | final distance | best "
+        "distance | fell far |\n|---|---|---|---|---|---|\n";
+  html << "<h2>Final vs best evaluation</h2><table><tr><th>run</th><th>final return</th><th>best return</th>"
+          "<th>best at env steps</th><th>final distance</th><th>best distance</th><th>fell far below best</th></tr>\n";
+  for (const Drop& x : dr) {
+    md << "| " << x.run->cell.name() << " | " << short_num(x.final_ret) << " | " << short_num(x.best_ret) << " ("
+       << short_num(x.best_steps) << ") | " << short_num(x.final_dist) << " | " << short_num(x.best_dist) << " | "
+       << (x.dropped ? "**yes**" : "no") << " |\n";
+    html << "<tr" << (x.dropped ? " class=\"bad\"" : "") << "><td class=\"l\">" << x.run->cell.name() << "</td><td>"
+         << short_num(x.final_ret) << "</td><td>" << short_num(x.best_ret) << "</td><td>" << short_num(x.best_steps)
+         << "</td><td>" << short_num(x.final_dist) << "</td><td>" << short_num(x.best_dist) << "</td><td>"
+         << (x.dropped ? "yes" : "no") << "</td></tr>\n";
+  }
+  html << "</table>\n";
+  md << "\n## Missing or failed runs\n\n";
+  html << "<h2>Missing or failed runs</h2>\n";
+  if (res.missing.empty()) {
+    md << "None: every run of the spec finished.\n";
+    html << "<p>None: every run of the spec finished.</p>\n";
+  } else {
+    md << "| run | state | log |\n|---|---|---|\n";
+    html << "<table><tr><th>run</th><th>state</th><th>log</th></tr>\n";
+    for (const ReportRun& r : d.runs) {
+      if (r.finished) continue;
+      md << "| " << r.cell.name() << " | " << r.state << " | " << r.log << " |\n";
+      html << "<tr class=\"bad\"><td class=\"l\">" << r.cell.name() << "</td><td class=\"l\">" << r.state
+           << "</td><td class=\"l\">" << html_escape(r.log) << "</td></tr>\n";
+    }
+    html << "</table>\n";
+  }
+  html << "<p class=\"note\">Files: summary.csv, summary.md, prob_improvement.csv, final_vs_best.csv, missing.csv and "
+          "the SVG figures beside this page.</p></body></html>\n";
+  write_file_atomic(out("summary.md"), md.str());
+  write_file_atomic(res.index_html, html.str());
+  return res;
+}
+
+}  // namespace atacom

@@ -1,0 +1,50 @@
+// atacom report DIR: the statistics and figures of a sweep directory
+// (src/sweep/sweep_state.hpp), written to DIR/report/:
+//   summary.csv           env, algo, metric, n, mean, std, median, q1, q3, iqm, iqm_ci_low, iqm_ci_high
+//                         (metric = the summary.json key; "best.<key>" for the best evaluation)
+//   prob_improvement.csv  env, metric, algo, baseline, n_algo, n_baseline, p_improvement (ATACOM-SAC vs each)
+//   final_vs_best.csv     per run: final and best evaluation side by side, drop = 1 when the final one fell far
+//   missing.csv           cells without a finished run: state and log
+//   summary.md            all of it as tables
+//   box_<env>.svg         one panel per metric, one box per algo, a point per seed
+//   curves_<env>.svg      eval return and final distance vs env steps: IQM over seeds, bootstrap band
+//   index.html            figures and tables in one page (inline SVG: opens from file://, no network)
+// Statistics: src/report/report_stats.hpp.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace atacom {
+
+struct ReportMetric {
+  const char* key;     // summary.json key ("best.final_distance": key of the best evaluation)
+  const char* label;
+  bool higher_better;
+  bool boxplot;        // a panel of the boxplot grid
+};
+const std::vector<ReportMetric>& report_metrics();
+
+struct ReportOptions {
+  std::string dir;              // the sweep directory
+  int resamples = 2000;         // bootstrap resamples of the tables' intervals
+  int curve_resamples = 500;    // of the learning-curve bands (one interval per evaluation)
+  uint64_t seed = 0;            // bootstrap seed
+  // A run's final evaluation "fell far below its best" when its return is
+  // below best - drop_return_frac * |best|, or its final distance above the
+  // best evaluation's by more than drop_distance (metres).
+  double drop_return_frac = 0.1;
+  double drop_distance = 0.2;
+};
+
+struct ReportResult {
+  std::string report_dir, index_html;
+  int runs = 0, finished = 0;
+  std::vector<std::string> missing;  // cell names without a finished run
+  std::vector<std::string> dropped;  // runs whose final evaluation fell far below their best
+};
+
+// Throws std::invalid_argument when DIR is not a sweep directory, or holds no finished run.
+ReportResult write_report(const ReportOptions& opts);
+
+}  // namespace atacom

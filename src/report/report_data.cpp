@@ -1,0 +1,109 @@
+// Reading a sweep directory for the report: every cell of its spec, finished or not.
+#include "src/report/report_data.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "src/core/config_json.hpp"
+#include "src/sweep/sweep_state.hpp"
+
+namespace fs = std::filesystem;
+
+namespace atacom {
+
+const std::vector<ReportMetric>& report_metrics() {
+  static const std::vector<ReportMetric> m = {
+      {"eval_discounted_return_mean", "discounted return (final policy)", true, true},
+      {"final_distance", "final distance [m] (final policy)", false, true},
+      {"train_terminations", "early terminations (training)", false, true},
+      {"avg_episode_steps", "episode steps (final policy)", true, true},
+      {"train_collisions", "collisions (training)", false, true},
+      {"train_violations", "constraint-violating steps (training)", false, true},
+      {"eval_return_mean", "return (final policy)", true, false},
+      {"best.eval_return_mean", "return (best evaluation)", true, false},
+      {"best.eval_discounted_return_mean", "discounted return (best evaluation)", true, false},
+      {"best.final_distance", "final distance [m] (best evaluation)", false, false},
+  };
+  return m;
+}
+
+std::optional<double> metric_value(const nlohmann::json& summary, const std::string& key) {
+  const nlohmann::json* j = &summary;
+  std::string k = key;
+  if (k.rfind("best.", 0) == 0) {
+    if (!summary.contains("best") || !summary["best"].is_object()) return std::nullopt;
+    j = &summary["best"];
+    k = k.substr(5);
+  }
+  if (!j->contains(k) || !(*j)[k].is_number()) return std::nullopt;
+  const double v = (*j)[k].get<double>();
+  if (!std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::vector<double> metric_values(const ReportData& d, const std::string& env, const std::string& algo,
+                                  const std::string& key) {
+  std::vector<double> out;
+  for (const ReportRun& r : d.runs)
+    if (r.finished && r.cell.env == env && r.cell.algo == algo)
+      if (const auto v = metric_value(r.summary, key)) out.push_back(*v);
+  return out;
+}
+
+namespace {
+
+void read_curves(const std::string& path, ReportRun& r) {
+  std::ifstream f(path);
+  std::string line;
+  if (!std::getline(f, line)) return;
+  std::vector<std::string> cols;
+  {
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) cols.push_back(c);
+  }
+  auto col = [&](const char* name) {
+    for (size_t i = 0; i < cols.size(); ++i)
+      if (cols[i] == name) return int(i);
+    return -1;
+  };
+  const int cs = col("env_steps"), cr = col("eval_return_mean"), cd = col("final_distance");
+  if (cs < 0 || cr < 0) return;
+  while (std::getline(f, line)) {
+    std::vector<double> v;
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) v.push_back(std::strtod(c.c_str(), nullptr));  // "nan" reads as NaN
+    if (int(v.size()) != int(cols.size())) continue;
+    r.steps.push_back(v[size_t(cs)]);
+    r.eval_return.push_back(v[size_t(cr)]);
+    if (cd >= 0) r.final_distance.push_back(v[size_t(cd)]);
+  }
+}
+
+}  // namespace
+
+ReportData load_report_data(const ReportOptions& opts) {
+  ReportData d;
+  d.opts = opts;
+  const SweepSpec spec = load_sweep_spec(opts.dir);
+  d.envs = spec.envs;
+  d.algos = spec.algos;
+  for (const SweepCell& c : sweep_cells(spec)) {
+    ReportRun r;
+    r.cell = c;
+    const CellStatus st = cell_status(opts.dir, c);
+    r.state = st.state;
+    r.log = st.log;
+    r.finished = st.state == "done";
+    const fs::path run = fs::path(opts.dir) / c.run_dir();
+    if (r.finished) {
+      r.summary = read_json_file((run / "summary.json").string(), "summary file");
+      read_curves((run / "progress.csv").string(), r);
+    }
+    d.runs.push_back(std::move(r));
+  }
+  return d;
+}
+
+}  // namespace atacom

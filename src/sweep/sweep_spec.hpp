@@ -1,0 +1,59 @@
+// A sweep: every (env, algo, seed) cell of a spec is one `atacom train` run.
+//
+// Spec (JSON, strict: unknown keys, duplicate keys and bad values are errors
+// naming the key):
+//   {"envs": ["table", ...], "algos": ["sac", "atacom-sac", ...],
+//    "seeds": [0, 1, ...], "steps": 2000000,
+//    "num_envs": 4,                              optional (train.num_envs)
+//    "overrides": {"table/sac": {"sac": {"lr_actor": 1e-5}},
+//                  "*/*": {"train": {"eval_every": 10000}}},   optional
+//    "description": "..."}                       optional
+// An override key is "<env>/<algo>", either part "*"; its value is a run
+// config fragment (sections env, train, sac, ...) merged into the cell's
+// config, least specific first: "*/*", "<env>/*", "*/<algo>", "<env>/<algo>".
+// A wildcard key's learner sections ("sac", ...) reach only the cells whose
+// algorithm trains that learner; an exact key's must fit its cell.
+// train.env/algo/seed/steps/num_envs come from the spec only. Every cell is
+// resolved when the spec is read, so a bad override fails before any run.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace atacom {
+
+struct SweepCell {
+  std::string env, algo;
+  int64_t seed = 0;
+  int64_t steps = 0;
+  bool learns = true;     // false: la/random/zero runs (one evaluation, no checkpoint)
+  nlohmann::json config;  // the `atacom train --config` file of this cell
+  std::string name() const;     // "table-atacom-sac-seed3" (logs, state files)
+  std::string run_dir() const;  // "runs/table/atacom-sac/seed-3" (relative to the sweep directory)
+};
+
+struct SweepSpec {
+  std::vector<std::string> envs, algos;
+  std::vector<int64_t> seeds;
+  int64_t steps = 0;
+  int num_envs = 0;           // 0: the train default
+  nlohmann::json overrides = nlohmann::json::object();
+  std::string description;
+};
+
+// Throws std::invalid_argument naming the key (and the cell, for overrides).
+SweepSpec parse_sweep_spec(const nlohmann::json& j);
+nlohmann::json sweep_spec_json(const SweepSpec& s);
+// Cells in a fixed order (env, then algo, then seed, as listed in the spec).
+std::vector<SweepCell> sweep_cells(const SweepSpec& s);
+
+// "--shard i/n": 0 <= i < n. Cell k belongs to shard k mod n.
+struct Shard {
+  int index = 0, count = 1;
+  bool holds(size_t cell) const { return int(cell % size_t(count)) == index; }
+};
+Shard parse_shard(const std::string& text);
+
+}  // namespace atacom
