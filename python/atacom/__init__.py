@@ -25,6 +25,7 @@ if _os.path.isdir(_DATA):
 
 from ._core import RandomStreams, data_dir, env_names, num_threads, set_num_threads  # noqa: E402
 from .projector import STATUS_FLAGS, Projector, ProjectResult, project, status_flags  # noqa: E402
+from .safelayer import SafeLayerResult, safelayer  # noqa: E402
 from .spaces import HAVE_GYMNASIUM, Box  # noqa: E402
 from .vector_env import AtacomVectorEnv, AutoresetMode, make_vec  # noqa: E402
 
@@ -41,6 +42,6 @@ def safety_layers():
 
 __all__ = [
     "AtacomVectorEnv", "AutoresetMode", "Box", "HAVE_GYMNASIUM", "ProjectResult", "Projector", "RandomStreams",
-    "STATUS_FLAGS", "data_dir", "default_config", "env_names", "make_vec", "num_threads", "project",
+    "STATUS_FLAGS", "SafeLayerResult", "data_dir", "default_config", "env_names", "make_vec", "num_threads", "project", "safelayer",
     "safety_layers", "set_num_threads", "status_flags",
 ]

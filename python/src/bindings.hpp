@@ -18,6 +18,7 @@ namespace py = pybind11;
 
 void bind_env(py::module_& m);
 void bind_projector(py::module_& m);
+void bind_safelayer(py::module_& m);
 void bind_misc(py::module_& m);
 
 // A NumPy array over memory owned by `owner` (kept alive as the array's base).
