@@ -12,7 +12,9 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <cstdlib>
 #include <ctime>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -147,24 +149,55 @@ void bench_gemm_peak(int m, int k, int n, int threads) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --only, --batch and --threads narrow the grid (profiling one case).
+  std::string only;
+  int batch_only = 0, threads_only = 0;
+  auto usage = []() {
+    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|gemm_peak] [--batch B] [--threads T]\n"
+                         "                 [--repeats R] [--window SECONDS]\n");
+    return 2;
+  };
   for (int i = 1; i < argc; ++i) {
+    const bool has_value = i + 1 < argc;
     if (!std::strcmp(argv[i], "--quick")) {
       repeats = 2;
       window_s = 0.3;
+    } else if (!std::strcmp(argv[i], "--only") && has_value) {
+      only = argv[++i];
+      if (only != "sac_update" && only != "actor_act" && only != "gemm_peak") return usage();
+    } else if (!std::strcmp(argv[i], "--batch") && has_value) {
+      batch_only = std::atoi(argv[++i]);
+      if (batch_only < 1 || batch_only > 65536) return usage();
+    } else if (!std::strcmp(argv[i], "--threads") && has_value) {
+      threads_only = std::atoi(argv[++i]);
+      if (threads_only < 1 || threads_only > 256) return usage();
+    } else if (!std::strcmp(argv[i], "--repeats") && has_value) {
+      repeats = std::atoi(argv[++i]);
+      if (repeats < 1 || repeats > 10000) return usage();
+    } else if (!std::strcmp(argv[i], "--window") && has_value) {
+      window_s = std::atof(argv[++i]);
+      if (!(window_s > 0 && window_s <= 600)) return usage();
     } else {
-      std::fprintf(stderr, "usage: bench_sac [--quick]\n");
-      return 2;
+      return usage();
     }
   }
-  for (int threads : {1, 2})
-    for (int B : {64, 256}) bench_sac_update(B, threads);
-  for (int threads : {1, 2})
-    for (int N : {1, 1024, 16384}) bench_actor_act(N, threads);
-  for (int threads : {1, 2}) {
-    bench_gemm_peak(64, 256, 256, threads);
-    bench_gemm_peak(256, 256, 256, threads);
-    bench_gemm_peak(64, 27, 256, threads);
-    bench_gemm_peak(1024, 1024, 1024, threads);
-  }
+  std::vector<int> thread_list = {1, 2};
+  if (threads_only) thread_list = {threads_only};
+  std::vector<int> batch_list = {64, 256};
+  if (batch_only) batch_list = {batch_only};
+  const auto want = [&](const char* name) { return only.empty() || only == name; };
+  if (want("sac_update"))
+    for (int threads : thread_list)
+      for (int B : batch_list) bench_sac_update(B, threads);
+  if (want("actor_act"))
+    for (int threads : thread_list)
+      for (int N : {1, 1024, 16384}) bench_actor_act(N, threads);
+  if (want("gemm_peak"))
+    for (int threads : thread_list) {
+      bench_gemm_peak(64, 256, 256, threads);
+      bench_gemm_peak(256, 256, 256, threads);
+      bench_gemm_peak(64, 27, 256, threads);
+      bench_gemm_peak(1024, 1024, 1024, threads);
+    }
   return 0;
 }

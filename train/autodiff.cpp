@@ -132,8 +132,21 @@ typename Tape<T>::Id Tape<T>::leaf(T* value, T* grad, int rows, int cols) {
 
 // ---------------------------------------------------------------- linear
 // Forward: y_q = x_q W_q + b_q per group q, tiled (row block x column block).
+namespace {
+// Restrict-qualified pointers by value, so the loops vectorise.
 template <class T>
-typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups) {
+void relu_rows(T* __restrict y, int64_t ld, int rows, int cols) {
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j) y[i * ld + j] = y[i * ld + j] > T(0) ? y[i * ld + j] : T(0);
+}
+template <class T>
+void relu_mask_grad(T* __restrict g, const T* __restrict v, int64_t lo, int64_t hi) {
+  for (int64_t k = lo; k < hi; ++k) g[k] = v[k] > T(0) ? T(0) + g[k] : T(0);
+}
+}  // namespace
+
+template <class T>
+typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups, bool relu) {
   const Node& x = node(xi);
   const Node& w = node(wi);
   check(groups >= 1 && w.rows % groups == 0, "linear", "weight rows " + std::to_string(w.rows) +
@@ -149,7 +162,7 @@ typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups) {
   }
   const bool ng = x.needs_grad || w.needs_grad || (bi >= 0 && node(bi).needs_grad);
   Node y = make(Op::Linear, B, out * groups, ng);
-  y.a = xi; y.b = wi; y.c = bi; y.i0 = groups;
+  y.a = xi; y.b = wi; y.c = bi; y.i0 = groups; y.i1 = relu ? 1 : 0;
   const T* xv = x.v;
   const T* wv = w.v;
   const T* bv = bi >= 0 ? node(bi).v : nullptr;
@@ -172,6 +185,7 @@ typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups) {
     CMatMap<T> X(xv + int64_t(r0) * ldx + (shared ? 0 : q * in), nr, in, Eigen::OuterStride<>(ldx));
     CMatMap<T> W(wv + int64_t(q) * in * out + c0, in, nc, Eigen::OuterStride<>(out));
     Y.noalias() += X * W;
+    if (relu) relu_rows<T>(yt, ldy, nr, nc);
   });
   return push(y);
 }
@@ -196,6 +210,12 @@ void Tape<T>::back_linear(const Node& y) {
   const int nw = (dw || db) ? groups * wcb : 0;
   const double flops = 2.0 * B * in * out * groups * ((dx ? 1 : 0) + (dw ? 1 : 0));
   gemm_flops_ += flops;
+  if (y.i1) {
+    // Fused ReLU: dL/dz = dL/dy where y > 0 (y > 0 exactly where z > 0),
+    // written over y's own gradient, which nothing else reads. 0 + g gives
+    // the bits of the separate relu node's gx += g into a zeroed gx.
+    for_elems(int64_t(B) * ldy, [g = y.g, v = y.v](int64_t lo, int64_t hi) { relu_mask_grad<T>(g, v, lo, hi); });
+  }
   run_tasks(nx + nw, flops, [&](int t) {
     if (t < nx) {
       const int q = t / (rb * xcb), r = (t / xcb) % rb, c = t % xcb;

@@ -63,7 +63,9 @@ class Tape {
   // y = x W + b for `groups` independent blocks (an ensemble in one op):
   //   W (groups*in x out), b (1 x groups*out) or -1, y (B x groups*out);
   //   x (B x groups*in), or (B x in) shared by all groups.
-  Id linear(Id x, Id W, Id b, int groups = 1);
+  // relu = true applies max(y, 0) to each output tile while it is in cache
+  // (the same values and gradients as relu(linear(...)), one node fewer).
+  Id linear(Id x, Id W, Id b, int groups = 1, bool relu = false);
 
   Id add(Id a, Id b);
   Id sub(Id a, Id b);

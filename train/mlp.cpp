@@ -105,10 +105,11 @@ typename Tape<T>::Id Mlp<T>::forward(Tape<T>& tape, typename Tape<T>::Id x, bool
     T* gb = param_grads ? grads_.data() + l.b : nullptr;
     const auto W = tape.leaf(params_.data() + l.w, gw, ensemble_ * l.in, l.out);
     const auto b = tape.leaf(params_.data() + l.b, gb, 1, ensemble_ * l.out);
-    h = tape.linear(h, W, b, ensemble_);
-    if (li + 1 < layers_.size()) {
+    const bool hidden = li + 1 < layers_.size();
+    h = tape.linear(h, W, b, ensemble_, hidden && act_ == Activation::Relu);
+    if (hidden) {
       switch (act_) {
-        case Activation::Relu: h = tape.relu(h); break;
+        case Activation::Relu: break;  // fused into the linear op
         case Activation::Tanh: h = tape.tanh(h); break;
         case Activation::Sigmoid: h = tape.sigmoid(h); break;
         case Activation::Softplus: h = tape.softplus(h); break;

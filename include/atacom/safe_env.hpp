@@ -8,6 +8,7 @@
 #pragma once
 #include <atomic>
 #include <memory>
+#include <vector>
 
 #include "atacom/env.hpp"
 #include "atacom/projector.hpp"
@@ -22,6 +23,10 @@ class ControlAffineEnv : public BatchEnv {
   // into pb (sized for model and N). Must not allocate; may run concurrently
   // on disjoint ranges.
   virtual void constraint_model(ProjectorBatch& pb, int begin, int end) const = 0;
+  // SafeLayer's per-row threshold C_i = -delta_i (k values; empty: 0 on every
+  // row, the boundary c = 0 that ATACOM keeps, since the rows already carry
+  // the env's margins; docs/safelayer.md).
+  virtual std::vector<double> safelayer_threshold() const { return {}; }
 };
 
 class SafeEnv final : public BatchEnv {

@@ -8,6 +8,7 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/safe_env.hpp"
+#include "src/safety/safe_layer_env.hpp"
 #include "src/core/svg.hpp"
 #include "src/experiments/render_scene.hpp"
 #include "src/core/config_json.hpp"
@@ -138,6 +139,7 @@ RenderResult render_episode(const RenderConfig& cfg) {
   std::unique_ptr<BatchEnv> env = make_env(req);
   const BatchEnv* plain = env.get();
   if (const auto* safe = dynamic_cast<const SafeEnv*>(env.get())) plain = &safe->inner();
+  if (const auto* sl = dynamic_cast<const SafeLayerEnv*>(env.get())) plain = &sl->inner();
   const std::unique_ptr<RenderRecorder> rec = make_render_recorder(*plain);
   const EnvSpec& spec = env->spec();
   env->seed(cfg.seed);

@@ -10,6 +10,7 @@
 #include "atacom/projector.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
+#include "src/safety/filter_safelayer.hpp"
 
 namespace atacom {
 
@@ -85,7 +86,7 @@ json status_flags(uint32_t st) {
 json process(const json& j) {
   if (!j.is_object()) fail("expected a JSON object");
   static const char* known[] = {"f", "G", "J_q", "c", "alpha", "J_x", "xdot", "slack", "beta",
-                                "tol", "K_c", "basis", "equality", "id"};
+                                "tol", "K_c", "basis", "equality", "id", "method", "dt", "threshold"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     bool ok = false;
     for (const char* kname : known) ok = ok || it.key() == kname;
@@ -94,6 +95,7 @@ json process(const json& j) {
   for (const char* req : {"f", "G", "J_q", "c", "alpha"})
     if (!j.contains(req)) fail(std::string("missing key '") + req + "'");
   if (j.contains("J_x") != j.contains("xdot")) fail("'J_x' and 'xdot' must be given together");
+  const std::string method = filter_method(j);
 
   const std::vector<double> f = vec(j, "f");
   const std::vector<double> alpha = vec(j, "alpha");
@@ -137,6 +139,7 @@ json process(const json& j) {
     }
   }
   B.alpha = alpha;
+  if (method == "safelayer") return safelayer_filter(j, model, B);
   project_batch(model, B, {.store_basis = false, .parallel = false});
 
   std::vector<double> qdot(n);

@@ -9,6 +9,7 @@
 //   K_c    number >= 0                                                default 30 (1/dt at 30 Hz)
 //   basis  "projected" | "smooth"                                     default "projected"
 //   equality  k booleans                                              default all false
+//   method "atacom" (default) | "safelayer" (keys and outputs: filter_safelayer.hpp)
 //   id     anything; echoed back
 // Output keys: a (m), qdot (n) = f + G a, s (k), lambda, status (bits of
 // ProjectorStatus) and status_flags (their names). A line that cannot be

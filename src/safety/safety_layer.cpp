@@ -4,6 +4,7 @@
 
 #include "atacom/safe_env.hpp"
 #include "src/core/config_json.hpp"
+#include "src/safety/safe_layer_env.hpp"
 
 namespace atacom {
 
@@ -46,9 +47,11 @@ std::unique_ptr<BatchEnv> wrap_safety(std::unique_ptr<BatchEnv> env, SafetyLayer
       const ProjectorModel pm = inner->projector_model();
       return std::make_unique<SafeEnv>(std::move(inner), pm);
     }
-    case SafetyLayer::SafeLayer:
-      // The SafeLayer wrapper (src/safety/safe_layer_env) lands with the baselines.
-      throw std::invalid_argument("the safelayer safety layer is not available in this build yet");
+    case SafetyLayer::SafeLayer: {
+      // Linearised over the env's own control period, thresholds from the env.
+      const SafeLayerModel sm = safelayer_model(inner->projector_model(), inner->spec().dt, inner->safelayer_threshold());
+      return std::make_unique<SafeLayerEnv>(std::move(inner), sm);
+    }
     case SafetyLayer::None: break;
   }
   return inner;

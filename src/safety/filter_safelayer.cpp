@@ -1,0 +1,95 @@
+#include "src/safety/filter_safelayer.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "atacom/safelayer.hpp"
+
+namespace atacom {
+
+namespace {
+
+using nlohmann::json;
+
+double finite_number(const json& v, const std::string& what) {
+  if (!v.is_number()) throw std::invalid_argument("'" + what + "' must be a number");
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) throw std::invalid_argument("'" + what + "' is NaN or infinite");
+  return x;
+}
+
+json status_flags(uint32_t st) {
+  json f = json::array();
+  if (st & kSafeLayerInfeasible) f.push_back("infeasible");
+  if (st & kSafeLayerAlphaNonFinite) f.push_back("alpha_nonfinite");
+  if (st & kSafeLayerModelNonFinite) f.push_back("model_nonfinite");
+  if (st & kSafeLayerIterationLimit) f.push_back("iteration_limit");
+  return f;
+}
+
+}  // namespace
+
+std::string filter_method(const json& j) {
+  std::string method = "atacom";
+  if (j.contains("method")) {
+    const json& v = j.at("method");
+    if (!v.is_string() || (v.get<std::string>() != "atacom" && v.get<std::string>() != "safelayer"))
+      throw std::invalid_argument("'method' must be \"atacom\" or \"safelayer\"");
+    method = v.get<std::string>();
+  }
+  static const char* atacom_only[] = {"slack", "beta", "tol", "K_c", "basis", "equality"};
+  static const char* safelayer_only[] = {"dt", "threshold"};
+  if (method == "safelayer") {
+    for (const char* key : atacom_only)
+      if (j.contains(key)) throw std::invalid_argument(std::string("'") + key + "' is an ATACOM key; \"method\": \"safelayer\" takes dt and threshold");
+  } else {
+    for (const char* key : safelayer_only)
+      if (j.contains(key)) throw std::invalid_argument(std::string("'") + key + "' needs \"method\": \"safelayer\"");
+  }
+  return method;
+}
+
+json safelayer_filter(const json& j, const ProjectorModel& model, const ProjectorBatch& B) {
+  const int n = model.n, m = model.m, k = model.k;
+  double dt = 1.0 / 30.0;
+  if (j.contains("dt")) {
+    dt = finite_number(j.at("dt"), "dt");
+    if (!(dt > 0)) throw std::invalid_argument("'dt' must be > 0");
+  }
+  std::vector<double> threshold(k, 0.0);
+  if (j.contains("threshold")) {
+    const json& t = j.at("threshold");
+    if (t.is_array()) {
+      if (static_cast<int>(t.size()) != k)
+        throw std::invalid_argument("'threshold' has " + std::to_string(t.size()) +
+                                    " entries, expected one per constraint (" + std::to_string(k) + ") or a single value");
+      for (int i = 0; i < k; ++i) threshold[i] = finite_number(t[i], "threshold[" + std::to_string(i) + "]");
+    } else {
+      threshold.assign(k, finite_number(t, "threshold"));
+    }
+  }
+  const SafeLayerModel sm = safelayer_model(model, dt, threshold);
+  SafeLayerBatch out(sm, 1);
+  safelayer_batch(sm, B, out, {.store_active_rows = true, .parallel = false});
+  std::vector<double> qdot(n);
+  for (int i = 0; i < n; ++i) {
+    double v = model.has_drift ? B.f[i] : 0.0;
+    for (int c = 0; c < m; ++c) v += B.G[size_t(i) * m + c] * out.a[c];
+    qdot[i] = v;
+  }
+  json active = json::array();
+  for (int i = 0; i < k; ++i)
+    if (out.active_rows[i]) active.push_back(i);
+  json res = {{"a", out.a},
+              {"qdot", qdot},
+              {"active", active},
+              {"correction", out.correction[0]},
+              {"iterations", out.iterations[0]},
+              {"status", out.status[0]},
+              {"status_flags", status_flags(out.status[0])}};
+  if (j.contains("id")) res["id"] = j.at("id");
+  return res;
+}
+
+}  // namespace atacom
