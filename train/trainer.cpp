@@ -294,6 +294,9 @@ bool Run::resume_from_checkpoint() {
     throw std::runtime_error("cannot resume the run in '" + opts_.out_dir + "': " + e.what());
   }
   if (progress_.rows() > 0) last_eval_return_ = progress_.series(3).back();
+  // A kill between checkpoint.bin and checkpoint.json leaves the manifest of
+  // the previous checkpoint: rewrite it from the one that was loaded.
+  write_file_atomic(path("checkpoint.json"), ck.manifest.dump(2) + "\n");
   last_ckpt_steps_ = done;
   return true;
 }

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <stdexcept>
 #include <string_view>
 
@@ -42,7 +43,14 @@ long temp_file_pid(std::string_view name) {
 // process that had the same pid (pids repeat across containers and reboots).
 bool process_alive(long pid) {
   if (pid <= 0 || pid == long(::getpid())) return false;
-  return ::kill(pid_t(pid), 0) == 0 || errno == EPERM;
+  if (::kill(pid_t(pid), 0) != 0 && errno != EPERM) return false;
+  // A killed process nobody has reaped yet (a container's init often does
+  // not) still answers kill(0): it is a zombie, state 'Z' in /proc, and dead.
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!std::getline(stat, text)) return true;
+  const size_t paren = text.rfind(')');
+  return !(paren != std::string::npos && paren + 2 < text.size() && text[paren + 2] == 'Z');
 }
 
 }  // namespace
