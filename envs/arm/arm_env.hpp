@@ -79,6 +79,7 @@ struct ArmHriConfig {
   double human_blend = 0.02;     // smooth-min k over the 16 capsules, m (error bound 15 k / 4)
   double rho_tilt = 0.5;         // reward per radian of tilt
   double frames_per_step = 0.5;  // motion frames per env step (reference: one frame every 2 steps)
+  bool compensate_motion = true;   // false: J_x = 0 (ablation: the projector ignores the human's motion)
   HumanSplit split = HumanSplit::Train;
   std::vector<AlignedBox> targets;  // goal regions, one drawn uniformly per episode (reference 4.4)
 };

@@ -213,6 +213,7 @@ void to_json(json& j, const ArmEnvConfig& c) {
                 {"human_blend", h.human_blend},
                 {"rho_tilt", h.rho_tilt},
                 {"frames_per_step", h.frames_per_step},
+                {"compensate_motion", h.compensate_motion},
                 {"split", human_split_name(h.split)},
                 {"targets", targets}};
   }
@@ -282,6 +283,9 @@ void from_json(const json& j, ArmEnvConfig& c) {
     x.human_blend = s.number("human_blend", range::closed_open(0.0, 0.1));
     x.rho_tilt = s.number("rho_tilt");
     x.frames_per_step = s.number("frames_per_step", range::open_closed(0.0, 4.0));
+    const json& cm = s.at("compensate_motion");
+    if (!cm.is_boolean()) throw std::invalid_argument("config key '" + s.path("compensate_motion") + "' must be true or false");
+    x.compensate_motion = cm.get<bool>();
     const json& sp = s.at("split");
     if (!sp.is_string()) throw std::invalid_argument("config key '" + s.path("split") + "' must be train, test or all");
     x.split = parse_human_split(sp.get<std::string>());

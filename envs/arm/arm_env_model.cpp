@@ -200,7 +200,7 @@ void ArmEnv::constraint_model(ProjectorBatch& pb, int begin, int end) const {
       const size_t se = static_cast<size_t>(e);
       double* Jx = &pb.Jx[se * K];
       std::fill(Jx, Jx + K, 0.0);
-      std::memcpy(Jx + kRowHuman, &dcdt_[se * kArmPoi], sizeof(double) * kArmPoi);
+      if (config_.hri.compensate_motion) std::memcpy(Jx + kRowHuman, &dcdt_[se * kArmPoi], sizeof(double) * kArmPoi);
       pb.xdot[se] = 1.0;
     }
   // Dynamic rows: whole lane groups by 8x8 register transposes, the rest
