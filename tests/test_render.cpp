@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <unistd.h>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -148,7 +149,7 @@ TEST_CASE("render: the page's script runs in headless chromium", "[render][slow]
   c.policy = "zero";
   c.seed = 4;
   const RenderResult r = render_episode(c);
-  const auto dir = std::filesystem::temp_directory_path() / "atacom_test_render_chromium";
+  const auto dir = std::filesystem::temp_directory_path() / ("atacom_test_render_chromium." + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string page = (dir / "page.html").string();
   std::ofstream(page) << r.html;
