@@ -410,7 +410,8 @@ TrainSummary Run::go() {
   while (c.env_steps < t.steps) {
     step();
     const bool end = c.env_steps >= t.steps;
-    const bool stop = opts_.stop_after > 0 && c.env_steps >= opts_.stop_after;
+    const bool stop = (opts_.stop_after > 0 && c.env_steps >= opts_.stop_after) ||
+                      (opts_.stop_signal && *opts_.stop_signal != 0);
     if (c.env_steps >= c.next_eval || end) {
       while (c.next_eval <= c.env_steps) c.next_eval += t.eval_every;
       last = evaluate_now();

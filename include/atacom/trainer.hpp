@@ -75,6 +75,9 @@ struct TrainOptions {
   // Stop (after writing a checkpoint) once env_steps reaches this; 0 = never.
   // Lets tests stop a run exactly where a kill would have left its checkpoint.
   int64_t stop_after = 0;
+  // Set (to non-zero) by a signal handler: the run writes a checkpoint after
+  // the current batch step and returns early (Slurm's pre-timeout signal).
+  const volatile int* stop_signal = nullptr;
 };
 
 struct TrainSummary {

@@ -2,11 +2,13 @@
 // run, locally (K at a time) or as a Slurm job array; `atacom sweep status`.
 #include <unistd.h>
 
+#include <filesystem>
 #include <iostream>
 
 #include "cli/command.hpp"
 #include "src/core/config_json.hpp"
 #include "src/sweep/sweep_local.hpp"
+#include "src/sweep/sweep_slurm.hpp"
 #include "src/sweep/sweep_spec.hpp"
 #include "src/sweep/sweep_state.hpp"
 
@@ -18,6 +20,11 @@ struct SweepArgs {
   int jobs = 0, threads_per_run = 0;
   bool dry_run = false;
   CLI::App* status = nullptr;
+  bool slurm = false;
+  SlurmOptions so;
+  std::string slurm_task;
+  int task_offset = 0;
+  std::vector<CLI::Option*> slurm_opts;
 };
 
 int run_status(const std::string& dir) {
@@ -34,7 +41,21 @@ int run(const SweepArgs& a) {
   if (a.spec.empty()) throw std::invalid_argument("atacom sweep: SPEC (a sweep spec JSON file) is required");
   if (a.out.empty()) throw std::invalid_argument("atacom sweep: --out DIR is required");
   const SweepSpec spec = parse_sweep_spec(atacom::read_json_file(a.spec, "sweep spec"));
+  if (!a.slurm)
+    for (const CLI::Option* opt : a.slurm_opts)
+      if (opt->count() > 0) throw std::invalid_argument(opt->get_name() + " applies to --slurm only");
+  if (a.slurm) {
+    if (a.dry_run || !a.slurm_task.empty() || a.shard != "0/1")
+      throw std::invalid_argument("--slurm cannot be combined with --dry-run, --shard or --slurm-task");
+    SlurmOptions so = a.so;
+    std::error_code ec;
+    so.exe = std::filesystem::read_symlink("/proc/self/exe", ec).string();
+    const auto ids = submit_sweep_slurm(spec, a.out, so, std::cout);
+    for (const auto& id : ids) std::cout << id << "\n";
+    return 0;
+  }
   SweepLocalOptions o;
+  if (!a.slurm_task.empty()) o.cells = slurm_task_cells(a.slurm_task, a.task_offset);
   o.dir = a.out;
   o.jobs = a.jobs;
   o.threads_per_run = a.threads_per_run;
@@ -56,6 +77,25 @@ const RegisterCommand reg{Command{
           ->check(CLI::Range(1, 4096));
       app.add_option("--shard", a->shard, "run only part i of n (cells k with k mod n = i), e.g. 0/4");
       app.add_flag("--dry-run", a->dry_run, "list the runs (and their commands) without running anything");
+      app.add_flag("--slurm", a->slurm, "submit the runs that are not done as Slurm job arrays (docs/sweeps.md)");
+      a->slurm_opts = {
+          app.add_option("--partition", a->so.partition, "Slurm partition"),
+          app.add_option("--time", a->so.time, "Slurm time limit per task (e.g. 1-12:00:00)"),
+          app.add_option("--cpus-per-task", a->so.cpus_per_task, "cores per task (its runs share them)")
+              ->check(CLI::Range(1, 4096)),
+          app.add_option("--mem", a->so.mem, "Slurm memory per node (e.g. 4G)"),
+          app.add_option("--account", a->so.account, "Slurm account"),
+          app.add_option("--max-parallel", a->so.max_parallel, "tasks running at once (--array=0-N%K)")
+              ->check(CLI::Range(1, 1000000)),
+          app.add_option("--sbatch-arg", a->so.sbatch_args, "extra sbatch option, one per flag (repeatable)"),
+          app.add_option("--runs-per-task", a->so.runs_per_task, "runs per array task")->check(CLI::Range(1, 100000)),
+          app.add_option("--presignal", a->so.presignal_s,
+                         "seconds before the time limit for the checkpoint signal (--signal=B:USR1@S)")
+              ->check(CLI::Range(10, 65535))};
+      app.add_option("--slurm-task", a->slurm_task, "(inside an array task) the tasks file of the submission")
+          ->group("");
+      app.add_option("--task-offset", a->task_offset, "(inside an array task) first task of this array")
+          ->check(CLI::NonNegativeNumber)->group("");
       a->status = app.add_subcommand("status", "print the state of every run of a sweep directory");
       a->status->add_option("DIR", a->status_dir, "sweep directory")->required();
       app.require_subcommand(0, 1);

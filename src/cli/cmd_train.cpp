@@ -1,6 +1,8 @@
 // atacom train: any algorithm of the table on any registered env (logic in train/).
 #include <unistd.h>
 
+#include <csignal>
+
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -17,6 +19,9 @@
 
 namespace atacom::cli {
 namespace {
+
+volatile int g_checkpoint_signal = 0;
+extern "C" void on_checkpoint_signal(int) { g_checkpoint_signal = 1; }
 
 struct TrainArgs {
   std::string env, algo, config, out, sdf;
@@ -78,7 +83,15 @@ int run(const TrainArgs& a) {
   opts.resume = a.resume;
   opts.log = &std::cerr;
   opts.log_is_tty = ::isatty(STDERR_FILENO) != 0;
+  // SIGUSR1 (Slurm's pre-timeout signal, forwarded by `atacom sweep`):
+  // checkpoint and exit 75, to be resumed with --resume.
+  opts.stop_signal = &g_checkpoint_signal;
+  std::signal(SIGUSR1, on_checkpoint_signal);
   const TrainSummary s = run_training(rc, opts);
+  if (g_checkpoint_signal != 0 && s.env_steps < rc.train.steps) {
+    std::cerr << "atacom train: SIGUSR1: checkpoint written at " << s.env_steps << " env steps; continue with --resume\n";
+    return 75;
+  }
   std::cout << s.summary.dump() << std::endl;
   return 0;
 }

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -79,9 +80,11 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   const std::vector<SweepCell> cells = sweep_cells(spec);
   std::vector<size_t> mine;
   for (size_t k = 0; k < cells.size(); ++k)
-    if (opts.shard.holds(k)) mine.push_back(k);
+    if (opts.cells.empty() ? opts.shard.holds(k) : std::find(opts.cells.begin(), opts.cells.end(), k) != opts.cells.end())
+      mine.push_back(k);
   const int jobs = opts.jobs > 0 ? opts.jobs : default_sweep_jobs();
-  const int threads = opts.threads_per_run > 0 ? opts.threads_per_run : std::max(1, available_cores() / jobs);
+  const int busy = std::max(1, std::min<int>(jobs, int(mine.size())));
+  const int threads = opts.threads_per_run > 0 ? opts.threads_per_run : std::max(1, available_cores() / busy);
   auto command = [&](const SweepCell& c, bool resume) {
     std::vector<std::string> a = {opts.exe, "--threads", std::to_string(threads), "train"};
     if (resume) a.insert(a.end(), {"--out", (fs::path(dir) / c.run_dir()).string(), "--resume"});
@@ -117,11 +120,12 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   }
 
   g_stop_signal.store(0);
-  struct sigaction sa{}, old_int{}, old_term{};
+  struct sigaction sa{}, old_int{}, old_term{}, old_usr1{};
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, &old_int);
   sigaction(SIGTERM, &sa, &old_term);
+  sigaction(SIGUSR1, &sa, &old_usr1);
 
   std::vector<size_t> queue;
   for (size_t k : mine)
@@ -276,17 +280,19 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     }
   }
   const int sig = g_stop_signal.load();
+  // SIGUSR1 (pre-timeout): every run checkpoints and exits; SIGINT/SIGTERM: they stop (resume from the last checkpoint).
   if (sig != 0)
-    for (const Child& ch : running) ::kill(ch.pid, SIGTERM);
+    for (const Child& ch : running) ::kill(ch.pid, sig == SIGUSR1 ? SIGUSR1 : SIGTERM);
   while (!running.empty()) reap(true);
   write_sweep_json(dir, cells);
   progress(true);
   if (opts.log && opts.log_is_tty) *opts.log << "\n";
   sigaction(SIGINT, &old_int, nullptr);
   sigaction(SIGTERM, &old_term, nullptr);
+  sigaction(SIGUSR1, &old_usr1, nullptr);
   if (sig != 0) {
     if (opts.log) *opts.log << "sweep: stopped by signal " << sig << "; run the same command again to go on\n";
-    return 130;
+    return sig == SIGUSR1 ? 75 : 130;
   }
   // Cells another process ran, or still runs, count as not finished here.
   int not_done = 0;

@@ -13,6 +13,7 @@
 #pragma once
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include "src/sweep/sweep_spec.hpp"
 
@@ -24,6 +25,7 @@ struct SweepLocalOptions {
   int jobs = 0;                      // runs at a time (0: default_sweep_jobs)
   int threads_per_run = 0;           // 0: cores / jobs (at least 1)
   Shard shard;
+  std::vector<size_t> cells;         // non-empty: exactly these cells (a Slurm task's), not the shard's
   bool dry_run = false;
   std::ostream* log = nullptr;       // progress line target
   bool log_is_tty = false;
@@ -37,7 +39,8 @@ int available_cores();
 int default_sweep_jobs();
 
 // Returns 0 when every cell of the shard is done, 1 when some failed, 130
-// when stopped by SIGINT/SIGTERM (children are stopped too; rerun to go on).
+// when stopped by SIGINT/SIGTERM (children are stopped too; rerun to go on),
+// 75 on SIGUSR1 (every run wrote a checkpoint and exited: requeue).
 int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts);
 
 }  // namespace atacom

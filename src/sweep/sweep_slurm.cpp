@@ -1,0 +1,159 @@
+#include "src/sweep/sweep_slurm.hpp"
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <ostream>
+#include <stdexcept>
+
+#include "src/core/config_json.hpp"
+#include "src/core/fs_util.hpp"
+#include "src/sweep/sweep_state.hpp"
+
+namespace fs = std::filesystem;
+
+namespace atacom {
+
+namespace {
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// Runs a shell command; returns its exit code and stdout.
+int capture(const std::string& cmd, std::string& out) {
+  out.clear();
+  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
+  if (!p) return -1;
+  char b[4096];
+  size_t n;
+  while ((n = std::fread(b, 1, sizeof(b), p)) > 0) out.append(b, n);
+  const int st = ::pclose(p);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+int max_array_size() {
+  std::string out;
+  if (capture("scontrol show config", out) == 0) {
+    const size_t at = out.find("MaxArraySize");
+    if (at != std::string::npos) {
+      const size_t eq = out.find('=', at);
+      if (eq != std::string::npos) {
+        const long v = std::strtol(out.c_str() + eq + 1, nullptr, 10);
+        if (v > 0) return int(v);
+      }
+    }
+  }
+  return 1001;  // Slurm's default
+}
+
+}  // namespace
+
+std::string slurm_array_script(const std::string& dir, const std::string& sub_dir, const std::string& tasks_file,
+                               int offset, int tasks, const SlurmOptions& o) {
+  std::string s = "#!/bin/bash\n#SBATCH --job-name=atacom-sweep\n";
+  s += "#SBATCH --array=0-" + std::to_string(tasks - 1) + (o.max_parallel > 0 ? "%" + std::to_string(o.max_parallel) : "") + "\n";
+  s += "#SBATCH --cpus-per-task=" + std::to_string(o.cpus_per_task) + "\n";
+  if (!o.time.empty()) s += "#SBATCH --time=" + o.time + "\n";
+  if (!o.mem.empty()) s += "#SBATCH --mem=" + o.mem + "\n";
+  if (!o.partition.empty()) s += "#SBATCH --partition=" + o.partition + "\n";
+  if (!o.account.empty()) s += "#SBATCH --account=" + o.account + "\n";
+  s += "#SBATCH --output=" + sub_dir + "/task-%A_%a.log\n#SBATCH --open-mode=append\n";
+  s += "#SBATCH --signal=B:USR1@" + std::to_string(o.presignal_s) + "\n#SBATCH --requeue\n";
+  for (const auto& a : o.sbatch_args) s += "#SBATCH " + a + "\n";
+  s += "# Written by atacom sweep --slurm. The sweep runs in the background so that bash runs the\n"
+       "# USR1 trap at once: every run writes a checkpoint and exits, then the task requeues itself.\n"
+       "set -u\n"
+       "echo \"=== task ${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID} (job $SLURM_JOB_ID) on $(hostname) at $(date -u +%FT%TZ)\"\n";
+  s += quote(o.exe) + " sweep " + quote(dir + "/spec.json") + " --out " + quote(dir) + " --slurm-task " +
+       quote(tasks_file) + " --task-offset " + std::to_string(offset) + " &\n";
+  s += "child=$!\nrequeue=0\ntrap 'requeue=1; kill -USR1 $child' USR1\n"
+       "wait $child; rc=$?\n"
+       "while kill -0 $child 2>/dev/null; do wait $child; rc=$?; done\n"
+       "if [ $requeue = 1 ]; then\n"
+       "  echo \"=== USR1: runs checkpointed (exit $rc); requeueing $SLURM_JOB_ID\"\n"
+       "  scontrol requeue \"$SLURM_JOB_ID\"\n  exit 0\nfi\nexit $rc\n";
+  return s;
+}
+
+std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset) {
+  const char* id = std::getenv("SLURM_ARRAY_TASK_ID");
+  if (!id || !*id) throw std::invalid_argument("--slurm-task: SLURM_ARRAY_TASK_ID is not set (run inside a Slurm array task)");
+  char* end = nullptr;
+  const long k = std::strtol(id, &end, 10);
+  if (*end != '\0' || k < 0) throw std::invalid_argument("SLURM_ARRAY_TASK_ID is not a task index");
+  const nlohmann::json t = read_json_file(tasks_file, "slurm tasks file");
+  const size_t task = size_t(k) + size_t(offset);
+  if (!t.contains("tasks") || !t["tasks"].is_array() || task >= t["tasks"].size())
+    throw std::invalid_argument("slurm tasks file '" + tasks_file + "' has no task " + std::to_string(task));
+  return t["tasks"][task].get<std::vector<size_t>>();
+}
+
+std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::string& dir_in, const SlurmOptions& o,
+                                            std::ostream& log) {
+  const std::string dir = fs::absolute(dir_in).lexically_normal().string();
+  save_or_check_spec(dir, spec);
+  const fs::path slurm = fs::path(dir) / "slurm";
+  fs::create_directories(slurm);
+  const fs::path jobs_file = slurm / "jobs.json";
+  nlohmann::json jobs = fs::exists(jobs_file) ? read_json_file(jobs_file.string(), "slurm jobs file") : nlohmann::json::array();
+  for (const auto& j : jobs) {  // never two submissions of one sweep in the queue at once
+    std::string out;
+    const std::string id = j.at("job_id").get<std::string>();
+    if (capture("squeue -h -o %i -j " + quote(id), out) == 0 && out.find_first_not_of(" \n") != std::string::npos)
+      throw std::runtime_error("job " + id + " of this sweep is still queued or running (squeue -j " + id +
+                               "); wait for it or scancel it, then submit again");
+  }
+  const std::vector<SweepCell> cells = sweep_cells(spec);
+  std::vector<size_t> todo;
+  for (size_t k = 0; k < cells.size(); ++k)
+    if (run_files_state(dir, cells[k]) != "done") todo.push_back(k);
+  if (todo.empty()) {
+    log << "sweep: every run of " << dir << " is done; nothing to submit\n";
+    return {};
+  }
+  for (const char* sub : {"inputs", "logs", "state", "runs"}) fs::create_directories(fs::path(dir) / sub);
+  for (size_t k : todo) {
+    const std::string p = (fs::path(dir) / "inputs" / (cells[k].name() + ".json")).string();
+    if (!fs::exists(p)) write_file_atomic(p, cells[k].config.dump(2) + "\n");
+  }
+  nlohmann::json tasks = nlohmann::json::array();
+  for (size_t i = 0; i < todo.size(); i += size_t(o.runs_per_task)) {
+    nlohmann::json t = nlohmann::json::array();
+    for (size_t j = i; j < std::min(todo.size(), i + size_t(o.runs_per_task)); ++j) t.push_back(todo[j]);
+    tasks.push_back(t);
+  }
+  const std::string stamp = utc_now();
+  fs::path sub = slurm / ("submit-" + stamp);
+  for (int n = 2; fs::exists(sub); ++n) sub = slurm / ("submit-" + stamp + "-" + std::to_string(n));
+  fs::create_directories(sub);
+  const std::string tasks_file = (sub / "tasks.json").string();
+  write_file_atomic(tasks_file, nlohmann::json{{"tasks", tasks}}.dump() + "\n");
+  const int chunk = max_array_size();  // indices 0 .. MaxArraySize - 1
+  std::vector<std::string> ids;
+  for (int off = 0; off < int(tasks.size()); off += chunk) {
+    const int n = std::min<int>(chunk, int(tasks.size()) - off);
+    const std::string script = (sub / ("array-" + std::to_string(off) + ".sbatch")).string();
+    write_file_atomic(script, slurm_array_script(dir, sub.string(), tasks_file, off, n, o));
+    std::string out;
+    const int rc = capture("sbatch --parsable " + quote(script), out);
+    const std::string id = out.substr(0, out.find_first_of(";\n"));
+    if (rc != 0 || id.empty() || id.find_first_not_of("0123456789") != std::string::npos)
+      throw std::runtime_error("sbatch " + script + " failed (exit " + std::to_string(rc) + "): " + printable_text(out));
+    ids.push_back(id);
+    jobs.push_back({{"job_id", id}, {"script", script}, {"tasks_file", tasks_file}, {"offset", off}, {"tasks", n},
+                    {"submitted_utc", stamp}});
+    write_file_atomic(jobs_file.string(), jobs.dump(2) + "\n");
+    log << "sweep: submitted job " << id << " (array 0-" << n - 1 << ", " << o.runs_per_task << " runs per task; logs "
+        << sub.string() << "/task-" << id << "_<i>.log)\n";
+  }
+  log << "sweep: " << todo.size() << " runs in " << tasks.size() << " tasks; `atacom sweep status " << dir_in
+      << "` follows them\n";
+  return ids;
+}
+
+}  // namespace atacom

@@ -1,0 +1,47 @@
+// A sweep as Slurm job arrays: `atacom sweep SPEC --out DIR --slurm ...`.
+//
+// Submitting groups the cells that are not done into tasks of
+// --runs-per-task cells, writes DIR/slurm/<submission>/tasks.json and one
+// sbatch script per array (arrays larger than the cluster's MaxArraySize are
+// split), submits them (`sbatch --parsable`), prints the job ids and records
+// them in DIR/slurm/jobs.json. A later submission refuses while an earlier
+// job of the sweep is still queued or running, and submits only the cells
+// that are not done.
+//
+// Each task runs `atacom sweep DIR/spec.json --out DIR --slurm-task FILE
+// --task-offset O` (the cells of task O + SLURM_ARRAY_TASK_ID, with the
+// task's cores: SLURM_CPUS_PER_TASK, else SLURM_CPUS_ON_NODE) under a bash
+// wrapper: on the pre-timeout signal (--signal=B:USR1@S) it forwards USR1,
+// every run writes a checkpoint and exits, and the task requeues itself
+// (`scontrol requeue $SLURM_JOB_ID`); the requeued task resumes them bitwise.
+#pragma once
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "src/sweep/sweep_spec.hpp"
+
+namespace atacom {
+
+struct SlurmOptions {
+  std::string partition, time, mem, account;
+  int cpus_per_task = 1;
+  int max_parallel = 0;          // %K of --array (0: no limit)
+  int runs_per_task = 1;
+  int presignal_s = 120;         // --signal=B:USR1@<this>
+  std::vector<std::string> sbatch_args;  // extra "#SBATCH <arg>" lines
+  std::string exe;               // the atacom binary the tasks run (absolute; nodes must see it)
+};
+
+// The script of one array of `tasks` tasks starting at task `offset`.
+std::string slurm_array_script(const std::string& dir, const std::string& sub_dir, const std::string& tasks_file,
+                               int offset, int tasks, const SlurmOptions& o);
+
+// Submits; returns the job ids. Throws std::runtime_error naming the failing command.
+std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::string& dir, const SlurmOptions& o,
+                                            std::ostream& log);
+
+// The cells of task (offset + SLURM_ARRAY_TASK_ID) of a tasks file.
+std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset);
+
+}  // namespace atacom
