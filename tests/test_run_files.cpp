@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/trainer.hpp"
+#include "run_dir_compare.hpp"
 #include "train/checkpoint.hpp"
 
 namespace fs = std::filesystem;
@@ -202,3 +203,37 @@ TEST_CASE("run files: --config is a file for every subcommand, flags that do not
   fs::remove(log);
   fs::remove(cfg);
 }
+
+// Issue 14 section 1 for one run: killed (SIGKILL) before each of its file
+// writes in turn (src/core/fs_util.hpp: the n-th write's temp file is written,
+// not renamed: the files of a kill anywhere after write n - 1), the same
+// command again (with --resume once config.json is there) ends with files
+// identical to an uninterrupted run's, policy_best and policy_final included.
+TEST_CASE("run files: killed with SIGKILL before any file write, train --resume ends with the uninterrupted files",
+          "[run_files]") {
+  const std::string ref = tmp_dir("kill_ref"), dir = tmp_dir("kill"), cfg = tmp_dir("kill_cfg.json"),
+                    log = tmp_dir("kill.log");
+  std::ofstream(cfg) << small_run(600).dump();
+  const std::string first = "--threads 1 train --config " + cfg + " --out ";
+  REQUIRE(cli(first + ref, log) == 0);
+  const auto want = run_dir_compare::files(ref, ref);
+  REQUIRE(want.count("policy_best.bin") == 1);
+  REQUIRE(want.count("policy_final.bin") == 1);
+  int kills = 0;
+  for (int n = 1;; ++n) {
+    INFO("killed at write " << n);
+    fs::remove_all(dir);
+    ::setenv("ATACOM_TEST_KILL_AT_WRITE", std::to_string(n).c_str(), 1);
+    const int code = cli(first + dir, log);
+    ::unsetenv("ATACOM_TEST_KILL_AT_WRITE");
+    if (code == 0) break;  // n is past the run's last write
+    ++kills;
+    const bool has_config = fs::exists(dir + "/config.json");
+    REQUIRE(cli(has_config ? "--threads 1 train --resume --out " + dir : first + dir, log) == 0);
+    run_dir_compare::require_same(want, run_dir_compare::files(dir, dir));
+    REQUIRE(n < 100);
+  }
+  CHECK(kills >= 12);  // config, header, 3 evaluations x (row, SVG, checkpoint, manifest, best policy), final, summary
+  for (const auto& p : {ref, dir, cfg, log}) fs::remove_all(p);
+}
+

@@ -263,12 +263,14 @@ bool Run::resume_from_checkpoint() {
   const TrainConfig& t = cfg_.train;
   if (!fs::exists(path("checkpoint.bin"))) {
     // Without a checkpoint nothing can continue bitwise: refuse when the run
-    // already wrote results, restart (and say so) when it had not.
+    // had written results past a checkpoint (checkpoint.json is its trace),
+    // restart (and say so) when it had not: rows written before a kill that
+    // came ahead of the first checkpoint are rewritten identically.
     int64_t rows = 0;
     std::ifstream f(path("progress.csv"));
     for (std::string line; std::getline(f, line);) ++rows;
     rows = std::max<int64_t>(0, rows - 1);  // the header
-    if (rows > 0 || fs::exists(path("summary.json")))
+    if ((rows > 0 && fs::exists(path("checkpoint.json"))) || fs::exists(path("summary.json")))
       throw std::invalid_argument("checkpoint.bin is missing in '" + opts_.out_dir + "' while progress.csv holds " +
                                   std::to_string(rows) +
                                   " evaluation rows: the run cannot continue bitwise (restore the checkpoint, or "
@@ -293,7 +295,10 @@ bool Run::resume_from_checkpoint() {
   } catch (const std::exception& e) {
     throw std::runtime_error("cannot resume the run in '" + opts_.out_dir + "': " + e.what());
   }
-  if (progress_.rows() > 0) last_eval_return_ = progress_.series(3).back();
+  // last_eval_return_ stays NaN: the CSV holds it to 9 digits only, and a
+  // policy file written with that rounded value would differ from the
+  // uninterrupted run's. Every policy file is written after an evaluation
+  // of this process (record, or the re-evaluation of a finished run in go()).
   // A kill between checkpoint.bin and checkpoint.json leaves the manifest of
   // the previous checkpoint: rewrite it from the one that was loaded.
   write_file_atomic(path("checkpoint.json"), ck.manifest.dump(2) + "\n");
@@ -378,8 +383,11 @@ TrainSummary Run::finish(const EvalResult& last) {
   return out;
 }
 
+// config.json first: a run killed before its first checkpoint is then
+// continued by `atacom train --resume` (which starts it at step 0).
 void Run::start_files() {
   fs::create_directories(opts_.out_dir);
+  write_file_atomic(path("config.json"), run_config_json(cfg_).dump(2) + "\n");
   progress_.start();
 }
 
@@ -390,7 +398,6 @@ TrainSummary Run::go() {
   if (!learner_) {
     // Nothing to train: one evaluation, the same files and keys as a learner's run.
     start_files();
-    write_file_atomic(path("config.json"), run_config_json(cfg_).dump(2) + "\n");
     const EvalResult ev = evaluate_now();
     record(ev);
     print_progress(true, &ev);
@@ -400,8 +407,8 @@ TrainSummary Run::go() {
     return out;
   }
   const bool resumed = opts_.resume && resume_from_checkpoint();
-  if (!resumed) start_files();
-  write_file_atomic(path("config.json"), run_config_json(cfg_).dump(2) + "\n");
+  if (resumed) write_file_atomic(path("config.json"), run_config_json(cfg_).dump(2) + "\n");  // a grown budget
+  else start_files();
   start_ = last_print_ = std::chrono::steady_clock::now();
   steps_at_start_ = st_.counters.env_steps;
   RunCounters& c = st_.counters;
@@ -432,7 +439,12 @@ TrainSummary Run::go() {
     }
   }
   if (opts_.log && opts_.log_is_tty) *opts_.log << "\n";
-  if (!have_eval) last = evaluate_now();  // resumed a finished run, or stopped early
+  if (!have_eval) {  // resumed a finished run, or stopped early
+    // The same policy, env seeds and episodes as the evaluation that ended
+    // the run: bitwise its result, for summary.json and policy_final.
+    last = evaluate_now();
+    last_eval_return_ = last.return_mean;
+  }
   TrainSummary out = finish(last);
   if (c.env_steps >= t.steps) {
     write_policy(run_policy_file(RunPolicy::Final));
@@ -448,6 +460,9 @@ TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts) {
   const fs::path dir(opts.out_dir);
   if (fs::exists(dir) && !fs::is_directory(dir))
     throw std::invalid_argument("output path '" + opts.out_dir + "' exists and is not a directory");
+  // Temp files a killed earlier process of this run left behind: gone first,
+  // so a run killed before its first file is complete starts again as new.
+  remove_stale_temp_files(opts.out_dir);
   if (opts.resume) {
     if (!fs::exists(dir))
       throw std::invalid_argument("--resume: run directory '" + opts.out_dir + "' does not exist");
@@ -458,7 +473,6 @@ TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts) {
     throw std::invalid_argument("output directory '" + opts.out_dir +
                                 "' is not empty; pass --resume to continue that run or choose a new directory");
   }
-  remove_stale_temp_files(opts.out_dir);  // temp files a killed earlier process of this run left behind
   Run run(cfg, opts);  // builds envs and agent: config errors surface here, before any file is written
   return run.go();
 }

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdlib>
 
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,7 @@
 #include "cli/flag_checks.hpp"
 #include "envs/arm/arm_learned_sdf.hpp"
 #include "cli/json_file.hpp"
+#include "src/core/fs_util.hpp"
 #include "src/core/limits.hpp"
 #include "train/algorithms.hpp"
 
@@ -87,6 +89,7 @@ int run(const TrainArgs& a) {
   // checkpoint and exit 75, to be resumed with --resume.
   opts.stop_signal = &g_checkpoint_signal;
   std::signal(SIGUSR1, on_checkpoint_signal);
+  if (const char* k = std::getenv("ATACOM_TEST_KILL_AT_WRITE")) arm_kill_at_write(std::atol(k));  // crash tests
   const TrainSummary s = run_training(rc, opts);
   if (g_checkpoint_signal != 0 && s.env_steps < rc.train.steps) {
     std::cerr << "atacom train: SIGUSR1: checkpoint written at " << s.env_steps << " env steps; continue with --resume\n";

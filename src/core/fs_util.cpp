@@ -1,5 +1,6 @@
 #include "src/core/fs_util.hpp"
 
+#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -53,7 +54,30 @@ bool process_alive(long pid) {
   return !(paren != std::string::npos && paren + 2 < text.size() && text[paren + 2] == 'Z');
 }
 
+std::atomic<long> g_kill_at_write{0}, g_writes{0};
+
+// The directory entry a rename made survives a power loss only once the
+// directory itself is synced (a file's fsync covers its data, not its name).
+void fsync_parent_dir(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0) return;  // the rename is done; durability of the name is best effort here
+  const int rc = ::fsync(dfd);
+  const int err = errno;
+  ::close(dfd);
+  if (rc != 0 && err != EINVAL && err != EROFS) {
+    errno = err;
+    throw std::runtime_error("cannot write '" + path + "': fsync of its directory: " + std::strerror(err));
+  }
+}
+
 }  // namespace
+
+void arm_kill_at_write(long n) {
+  g_writes.store(0);
+  g_kill_at_write.store(n > 0 ? n : 0);
+}
 
 void write_file_atomic(const std::string& path, const std::string& data) {
   std::string tmp = path + ".tmp." + std::to_string(::getpid()) + ".XXXXXX";
@@ -87,7 +111,9 @@ void write_file_atomic(const std::string& path, const std::string& data) {
     fail("fsync");
   }
   if (::close(fd) != 0) fail("close");
+  if (const long k = g_kill_at_write.load(); k > 0 && g_writes.fetch_add(1) + 1 == k) ::raise(SIGKILL);
   if (::rename(tmp.c_str(), path.c_str()) != 0) fail("rename");
+  fsync_parent_dir(path);
 }
 
 int remove_stale_temp_files(const std::string& dir) {

@@ -1,4 +1,5 @@
-// Files a run leaves behind are written atomically: temp file, fsync, rename.
+// Files a run leaves behind are written atomically: temp file, fsync, rename,
+// fsync of the directory (so the new name survives a power loss too).
 // A crash mid-write never leaves a half-written result or checkpoint.
 //
 // Hostile directories: the temp file `<file>.tmp.<pid>.<6 random chars>` is
@@ -25,5 +26,13 @@ void write_file_atomic(const std::string& path, const std::string& data);
 // everything else are left alone. A missing directory is not an error.
 // Returns how many files it removed.
 int remove_stale_temp_files(const std::string& dir);
+
+// Crash-consistency tests only: after arm_kill_at_write(n) the n-th
+// write_file_atomic of this process (counted from the call) kills the
+// process with SIGKILL once its temp file is written, before the rename:
+// the files on disk are those of a kill at any moment after write n-1, plus
+// a leftover temp file. n <= 0 disarms. `atacom train` arms it from the
+// environment variable ATACOM_TEST_KILL_AT_WRITE (tests/test_sweep.cpp).
+void arm_kill_at_write(long n);
 
 }  // namespace atacom

@@ -1,0 +1,74 @@
+// Comparing run directories file by file, the wall-clock fields taken out
+// (the only thing an interrupted run may change): wall_s in summary.json and
+// checkpoint.json, and progress.csv's wall_s column. checkpoint.bin is left
+// out (its counters hold the wall time; checkpoint.json holds its agent hash).
+#pragma once
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace run_dir_compare {
+
+inline std::string slurp(const std::string& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+inline std::string comparable(const std::filesystem::path& p) {
+  const std::string name = p.filename().string();
+  const std::string text = slurp(p.string());
+  if (name == "summary.json" || name == "checkpoint.json") {
+    nlohmann::json j = nlohmann::json::parse(text);
+    j.erase("wall_s");
+    return j.dump();
+  }
+  if (name == "progress.csv") {
+    std::istringstream in(text);
+    std::string out, line;
+    while (std::getline(in, line)) {
+      std::vector<std::string> cols;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) cols.push_back(c);
+      REQUIRE(cols.size() > 2);
+      REQUIRE((cols[2] == "wall_s" || out.size() > 0));
+      cols.erase(cols.begin() + 2);
+      for (const auto& c : cols) out += c + ",";
+      out += "\n";
+    }
+    return out;
+  }
+  return text;
+}
+
+// Every regular file under `dir` (recursively) but checkpoint.bin, by its path relative to `root`.
+inline std::map<std::string, std::string> files(const std::string& dir, const std::string& root) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir)) {
+    if (!e.is_regular_file() || e.path().filename() == "checkpoint.bin") continue;
+    out[std::filesystem::relative(e.path(), root).string()] = comparable(e.path());
+  }
+  return out;
+}
+
+// REQUIREs the same file names and contents.
+inline void require_same(const std::map<std::string, std::string>& want, const std::map<std::string, std::string>& got) {
+  for (const auto& [name, text] : got) {
+    INFO("file only in the interrupted run: " << name);
+    CHECK(want.count(name) == 1);
+  }
+  REQUIRE(got.size() == want.size());
+  for (const auto& [name, text] : want) {
+    INFO(name);
+    REQUIRE(got.count(name) == 1);
+    REQUIRE(got.at(name) == text);
+  }
+}
+
+}  // namespace run_dir_compare
