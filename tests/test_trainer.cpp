@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -97,8 +98,34 @@ TEST_CASE("trainer: run directory outputs", "[trainer]") {
     REQUIRE(sum.contains(k));
   REQUIRE(sum["train_episodes"] == 2);  // 300 steps per env: one finished episode each
   REQUIRE(sum["avg_episode_steps"] == 200.0);
+  REQUIRE(sum["train_avg_episode_steps"] == 200.0);  // pendulum never terminates: every episode is the horizon
   REQUIRE(slurp(dir + "/progress.svg").rfind("<svg", 0) == 0);
   REQUIRE(json::parse(slurp(dir + "/checkpoint.json"))["env_steps"] == 600);
+  fs::remove_all(dir);
+}
+
+// The paper's "average episode steps over training" from the finished
+// episodes: whole steps over episodes, at most the horizon, below it once an
+// episode ended early, and the steps of unfinished episodes left out.
+TEST_CASE("trainer: train_avg_episode_steps is the mean length of the finished training episodes", "[trainer]") {
+  const std::string dir = tmp_dir("avg_steps");
+  json cfg = small_run(4000);
+  cfg["train"]["env"] = "table";
+  cfg["train"]["num_envs"] = 4;
+  cfg["train"]["eval_every"] = 2000;
+  cfg["train"]["eval_episodes"] = 1;
+  const json s = train(cfg, dir).summary;
+  const int horizon = atacom::make_env(atacom::EnvRequest{"table", 1})->spec().horizon;
+  const double avg = s["train_avg_episode_steps"].get<double>(), n = s["train_episodes"].get<double>();
+  INFO("avg " << avg << " over " << n << " episodes, " << s["train_terminations"] << " early, horizon " << horizon);
+  REQUIRE(n >= 4);
+  const double total = avg * n;
+  REQUIRE(std::abs(total - std::round(total)) < 1e-6 * total);
+  REQUIRE(avg <= horizon);
+  if (s["train_terminations"].get<int>() > 0) REQUIRE(avg < horizon);
+  REQUIRE(total <= 4000);
+  REQUIRE(total >= 4000 - 4.0 * horizon);
+  REQUIRE(s["avg_episode_steps"].is_number());  // the final evaluation's, kept beside it
   fs::remove_all(dir);
 }
 

@@ -1,8 +1,5 @@
 #include "train/checkpoint.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -18,14 +15,6 @@ namespace {
 
 constexpr char kMagic[8] = {'A', 'T', 'A', 'C', 'K', 'P', 'T', '\0'};
 
-void fsync_dir(const std::string& path) {
-  const std::string dir = std::filesystem::path(path).parent_path().string();
-  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (fd < 0) return;  // best effort: some filesystems refuse directory fds
-  ::fsync(fd);
-  ::close(fd);
-}
-
 }  // namespace
 
 void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt) {
@@ -40,8 +29,7 @@ void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt) {
   std::string bytes = s.str();
   const uint64_t h = bin::fnv1a(bytes.data(), bytes.size());
   bytes.append(reinterpret_cast<const char*>(&h), sizeof(h));
-  write_file_atomic(path, bytes);
-  fsync_dir(path);  // make the rename itself durable
+  write_file_atomic(path, bytes);  // fsyncs the directory too: the rename is durable
 }
 
 Checkpoint read_checkpoint(const std::string& path) {

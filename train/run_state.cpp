@@ -14,6 +14,7 @@ constexpr uint32_t kTagCounters = 0x434e5452;  // "CNTR"
 constexpr uint32_t kTagLearner = 0x4c524e52;   // "LRNR"
 constexpr uint32_t kTagStreams = 0x5354524d;   // "STRM"
 constexpr uint32_t kTagEnv = 0x454e5653;       // "ENVS"
+constexpr uint32_t kTagEpisodeSteps = 0x45505354;  // "EPST"
 constexpr uint64_t kActStream = uint64_t{1} << 32;  // action noise: stream kActStream + env id
 
 // Evaluations a run must have written by env_steps: one per batch step that
@@ -74,6 +75,7 @@ void init_run_state(RunState& s, const TrainConfig& t, const EnvSpec& spec, cons
   s.counters.next_ckpt = t.checkpoint_every > 0 ? t.checkpoint_every : 0;
   s.train_info_sums.assign(spec.info_names.size(), 0.0);
   s.best = nullptr;
+  s.train_episode_steps = 0;
   s.act_rngs.resize(size_t(t.num_envs));
   for (int i = 0; i < t.num_envs; ++i) s.act_rngs[size_t(i)].reseed(uint64_t(t.seed), kActStream + uint64_t(i));
   s.obs = initial.obs;
@@ -94,6 +96,8 @@ std::string save_run_payload(const RunState& s, const Learner& learner, const Ba
   bin::write_vec(p, s.obs);
   bin::write_tag(p, kTagEnv);
   env.save_state(p);
+  bin::write_tag(p, kTagEpisodeSteps);
+  bin::write_pod(p, s.train_episode_steps);
   return p.str();
 }
 
@@ -121,6 +125,15 @@ void load_run_payload(const std::string& payload, const TrainConfig& t, const En
     if (!std::isfinite(x)) throw std::runtime_error("checkpoint observation holds a non-finite value");
   bin::expect_tag(p, kTagEnv, "env");
   env.load_state(p);
+  r.train_episode_steps = -1;  // checkpoints of earlier builds end here
+  if (p.peek() != std::char_traits<char>::eof()) {
+    bin::expect_tag(p, kTagEpisodeSteps, "episode steps");
+    r.train_episode_steps = bin::read_pod<int64_t>(p, "episode steps");
+    const int64_t v = r.train_episode_steps, lo = r.counters.train_episodes, hi = r.counters.env_steps;
+    if (v != -1 && (v < lo || v > hi))
+      throw std::runtime_error("checkpoint counter train_episode_steps = " + std::to_string(v) + " is outside [" +
+                               std::to_string(lo) + ", " + std::to_string(hi) + "] (train_episodes, env_steps)");
+  }
   if (p.peek() != std::char_traits<char>::eof()) throw std::runtime_error("checkpoint payload is longer than its sections");
   s = std::move(r);
 }

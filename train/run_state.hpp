@@ -1,7 +1,9 @@
 // The trainer's own state (the learner keeps its own) and the checkpoint
 // payload that holds both:
 //   "CNTR" counters | info sums | best evaluation (JSON text) |
-//   "LRNR" learner payload | "STRM" action streams, observations | "ENVS" env batch
+//   "LRNR" learner payload | "STRM" action streams, observations | "ENVS" env batch |
+//   "EPST" steps of the finished training episodes (i64; absent in checkpoints
+//   of earlier builds, which load with it unknown)
 // Loading validates every counter against the config (train/run_state.cpp),
 // so a checkpoint with a valid checksum but impossible numbers is refused
 // with the name of the first bad one instead of spinning or erasing files.
@@ -47,6 +49,10 @@ struct RunState {
   nlohmann::json best;                  // the best evaluation so far (eval_json + "env_steps"), null: none
   std::vector<Rng> act_rngs;            // (N) training action noise, stream (seed, kActStream + i)
   std::vector<float> obs;               // (N x obs_dim) raw observation to act on next
+  // Steps of the finished training episodes (their episode_length summed):
+  // over train_episodes, the paper's "average episode steps over training".
+  // -1: unknown (a run resumed from a checkpoint written before it was kept).
+  int64_t train_episode_steps = 0;
 };
 
 // Fresh state of a run: counters at step 0, streams keyed by the seed.

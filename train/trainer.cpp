@@ -175,6 +175,7 @@ void Run::step() {
     if (b.done(i)) {
       ++c.train_episodes;
       if (b.terminated[size_t(i)]) ++c.train_terminations;
+      if (st_.train_episode_steps >= 0) st_.train_episode_steps += b.episode_length[size_t(i)];
       c.recent_return_sum += b.episode_return[size_t(i)];
       ++c.recent_returns;
       c.last_train_return = b.episode_return[size_t(i)];
@@ -351,6 +352,12 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
   s["train_episodes"] = c.train_episodes;
   s["train_terminations"] = c.train_terminations;
   s["train_violations"] = c.train_violations;
+  // The paper's "average episode steps over training"; an algorithm that
+  // does not learn runs only its evaluation episodes, so theirs stands in.
+  if (!learner_) s["train_avg_episode_steps"] = jnum(ev.avg_episode_steps);
+  else if (c.train_episodes > 0 && st_.train_episode_steps >= 0)
+    s["train_avg_episode_steps"] = double(st_.train_episode_steps) / double(c.train_episodes);
+  else s["train_avg_episode_steps"] = nullptr;  // no finished episode yet, or resumed from an older checkpoint
   s["train_max_constraint"] = std::isfinite(c.train_max_constraint) ? nlohmann::json(c.train_max_constraint) : nullptr;
   for (int col = 0; col < ninfo_; ++col) {
     if (spec_.info_reduce[size_t(col)] != InfoReduce::Sum) continue;
