@@ -17,6 +17,7 @@
 
 #include "atacom/rng.hpp"
 #include "atacom/trainer.hpp"
+#include "src/core/limits.hpp"
 #include "src/safety/filter.hpp"
 
 namespace fs = std::filesystem;
@@ -265,3 +266,35 @@ TEST_CASE("hostile config: duplicate keys and a directory as --config are refuse
   CHECK(r.out.find("underflow") == std::string::npos);
   fs::remove(cfg);
 }
+
+// Issue 10 item 8: a batch of envs beyond this machine's memory is refused
+// with an estimate (measured on two small probe batches, envs/registry.cpp)
+// before it is built, never a bare std::bad_alloc or the OOM killer. A nav
+// env keeps a physics world (about 190 KB): 2^20 of them need about 200 GB.
+TEST_CASE("hostile sizes: --envs beyond this machine's memory is refused with an estimate before allocating",
+          "[hostile]") {
+  const double have = double(atacom::limits::physical_memory_bytes());
+  if (have == 0 || have > 150e9) {
+    WARN("this machine's memory (" << have / 1e9 << " GB) holds 2^20 nav envs: nothing to refuse");
+    return;
+  }
+  for (const std::string args : {"rollout --env nav --envs 1048576 --steps 1",
+                                 "rollout --env nav --policy la --safety none --envs 1048576 --steps 1",
+                                 "train --env nav --algo atacom-sac --envs 1048576 --steps 1048576 --out /nonexistent/x"}) {
+    const Result r = atacom_cli(args);
+    INFO(args << " -> " << r.out);
+    CHECK(r.rc == 2);
+    CHECK(r.out.find("1048576 envs of 'nav' (about ") != std::string::npos);
+    CHECK(r.out.find("KB each") != std::string::npos);
+    CHECK(r.out.find("lower --envs") != std::string::npos);
+    CHECK(r.out.find("more than this machine's") != std::string::npos);
+    CHECK(r.out.find("bad_alloc") == std::string::npos);
+  }
+  // Far beyond any machine: the flag's range, by name.
+  const Result r = atacom_cli("rollout --env nav --envs 1000000000");
+  CHECK(r.rc != 0);
+  CHECK(r.out.find("--envs: 1000000000 is not an integer in [1, 2^20]") != std::string::npos);
+  // A batch that fits is built as before.
+  CHECK(atacom_cli("rollout --env table --policy zero --envs 8192 --steps 8192", "", false).rc == 0);
+}
+
