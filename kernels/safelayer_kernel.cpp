@@ -1,13 +1,16 @@
 // Batched SafeLayer: per env, the linearised rows g = dt J_q G,
 // h = C - c - dt (J_q f + J_x xdot), then the QP of kernels/safelayer_qp.
-// Most steps keep a_pi (no row would be crossed in one period), so the cost
-// is dominated by forming g, which is k n (diagonal G) or k n m (dense G).
+// Most steps keep a_pi (no row would be crossed in one period), so the
+// first pass screens kLanes envs at once, one per vector lane (the rows'
+// residuals at a_pi, k n multiply-adds per env); only the envs with a
+// violated row form g (k n or k n m) and enter the scalar solver.
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include "atacom/parallel.hpp"
 #include "atacom/safelayer.hpp"
+#include "kernels/lanes.hpp"
 #include "kernels/safelayer_qp.hpp"
 
 namespace atacom {
@@ -18,12 +21,16 @@ constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count indepen
 
 struct KernelScratch {
   safelayer_qp::Scratch qp;
-  std::vector<double> g, h, r, a_pi, dtG, v;
+  std::vector<double> g, h, r, a_pi, dtG;
+  std::vector<lanes::vd> l_api, l_v, l_r, l_xd;  // lane block: a_pi (m), v (n), residuals (k), xdot (p)
   void setup(const SafeLayerModel& mod) {
+    if (l_api.size() < size_t(mod.m)) l_api.resize(mod.m);
+    if (l_v.size() < size_t(mod.n)) l_v.resize(mod.n);
+    if (l_r.size() < size_t(mod.k)) l_r.resize(mod.k);
+    if (l_xd.size() < size_t(mod.p)) l_xd.resize(mod.p);
     if (g.size() < size_t(mod.k) * mod.m) g.resize(size_t(mod.k) * mod.m);
     if (h.size() < size_t(mod.k)) h.resize(mod.k), r.resize(mod.k);
     if (dtG.size() < size_t(mod.m)) dtG.resize(mod.m);
-    if (v.size() < size_t(mod.n)) v.resize(mod.n);
     if (a_pi.size() < size_t(mod.m)) a_pi.resize(mod.m);
     qp.setup(mod.m, mod.k);
   }
@@ -45,21 +52,102 @@ void check_batch(const SafeLayerModel& mod, const ProjectorBatch& B, const SafeL
     throw std::invalid_argument("safelayer: output batch does not match (use SafeLayerBatch(model, N))");
 }
 
-void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatch& O, int e, KernelScratch& S,
-               bool store_rows) {
+// Lane block of up to kLanes envs [lo, lo + count): a_pi, and the rows'
+// residuals at a_pi without forming g, r_i = c_i - C_i + J_q,i v + dt J_x,i
+// xdot with v = dt (f + G a_pi) (k n multiply-adds instead of k n m), one
+// env per vector lane. Most steps keep a_pi (no row would be crossed within
+// one period) and end here: the solver and the rows g are only formed for
+// the other lanes. A non-finite input makes some residual non-finite (NaN
+// propagates, Inf * 0 is NaN), so one check on r covers f, G, c, J and xdot.
+// Idle lanes repeat the last env. Bit masks per lane: keep, finite, alpha bad.
+struct LaneScreen {
+  uint32_t keep = 0, finite = 0, alpha_bad = 0;
+};
+
+LaneScreen screen_lanes(const SafeLayerModel& mod, const ProjectorBatch& B, int lo, int count, KernelScratch& S) {
+  using lanes::vd;
+  using lanes::vm;
+  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p;
+  const bool diag = mod.g_form == GForm::Diagonal;
+  const int gsz = diag ? n : n * m;
+  const double dt = mod.dt;
+  vd* api = S.l_api.data();
+  vd* v = S.l_v.data();
+  vd* r = S.l_r.data();
+  vd* xd = S.l_xd.data();
+  vm bad = vm{};
+  for (int j = 0; j < m; ++j) {
+    const vd al = lanes::load_strided(B.alpha.data() + size_t(lo) * m + j, m, count);
+    const vm fin = (al - al) == 0.0;
+    bad |= ~fin;
+    api[j] = lanes::vclamp(lanes::vsel(fin, al, vd{}), -1.0, 1.0);
+  }
+  const double* G = B.G.data() + size_t(lo) * gsz;
+  const double* f = mod.has_drift ? B.f.data() + size_t(lo) * n : nullptr;
+  for (int l = 0; l < n; ++l) {
+    vd s = f ? lanes::load_strided(f + l, n, count) : vd{};
+    if (diag) {
+      s += lanes::load_strided(G + l, gsz, count) * api[l];
+    } else {
+      for (int j = 0; j < m; ++j) s += lanes::load_strided(G + size_t(l) * m + j, gsz, count) * api[j];
+    }
+    v[l] = dt * s;
+  }
+  for (int q = 0; q < p; ++q) xd[q] = lanes::load_strided(B.xdot.data() + size_t(lo) * p + q, p, count);
+  const double* Jq = B.Jq.data() + size_t(lo) * k * n;
+  const double* Jx = p ? B.Jx.data() + size_t(lo) * k * p : nullptr;
+  const double* c = B.c.data() + size_t(lo) * k;
+  vm fin = ~vm{}, keep = ~vm{};
+  for (int i = 0; i < k; ++i) {
+    vd ri = lanes::load_strided(c + i, k, count) - mod.threshold[i];
+    for (int l = 0; l < n; ++l) ri += lanes::load_strided(Jq + size_t(i) * n + l, k * n, count) * v[l];
+    vd fx = vd{};
+    for (int q = 0; q < p; ++q) fx += lanes::load_strided(Jx + size_t(i) * p + q, k * p, count) * xd[q];
+    ri += dt * fx;
+    r[i] = ri;
+    fin &= (ri - ri) == 0.0;
+    keep &= ri <= kSafeLayerFeasTol;
+  }
+  LaneScreen out;
+  for (int l = 0; l < count; ++l) {
+    out.keep |= uint32_t(keep[l] != 0) << l;
+    out.finite |= uint32_t(fin[l] != 0) << l;
+    out.alpha_bad |= uint32_t(bad[l] != 0) << l;
+  }
+  return out;
+}
+
+// Writes env e's outputs from its answer a (already in O.a) and the rows'
+// residuals r at a.
+void finish_env(const SafeLayerModel& mod, SafeLayerBatch& O, int e, const double* a_pi, const double* r, bool finite,
+                int iters, uint32_t status, bool store_rows) {
+  const int m = mod.m, k = mod.k;
+  const double* a = O.a.data() + size_t(e) * m;
+  uint8_t* rows = store_rows ? O.active_rows.data() + size_t(e) * k : nullptr;
+  double corr = 0.0;
+  for (int j = 0; j < m; ++j) corr += (a[j] - a_pi[j]) * (a[j] - a_pi[j]);
+  int active = 0;
+  if (finite) {
+    for (int i = 0; i < k; ++i) {
+      const bool act = r[i] >= -kSafeLayerFeasTol;
+      active += act;
+      if (rows) rows[i] = act;
+    }
+  } else if (rows) {
+    std::fill_n(rows, k, uint8_t{0});
+  }
+  O.correction[e] = std::sqrt(corr);
+  O.active[e] = active;
+  O.iterations[e] = iters;
+  O.status[e] = status;
+}
+
+// Env e, some row violated at a_pi (finite inputs): the rows g = dt J_q G,
+// h = C - c - dt (J_q f + J_x xdot), then the QP.
+void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatch& O, int e, const double* a_pi,
+               uint32_t status, KernelScratch& S, bool store_rows) {
   const int n = mod.n, m = mod.m, k = mod.k, p = mod.p;
   const double dt = mod.dt;
-  uint32_t status = 0;
-  double* a_pi = S.a_pi.data();
-  const double* alpha = B.alpha.data() + size_t(e) * m;
-  for (int j = 0; j < m; ++j) {
-    if (std::isfinite(alpha[j])) {
-      a_pi[j] = std::clamp(alpha[j], -1.0, 1.0);
-    } else {
-      a_pi[j] = 0.0;
-      status |= kSafeLayerAlphaNonFinite;
-    }
-  }
   const double* G = B.G.data() + size_t(e) * (mod.g_form == GForm::Diagonal ? n : n * m);
   const double* Jq = B.Jq.data() + size_t(e) * k * n;
   const double* c = B.c.data() + size_t(e) * k;
@@ -69,89 +157,35 @@ void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatc
   double* g = S.g.data();
   double* h = S.h.data();
   double* r = S.r.data();
-  // Residuals at a_pi first, without forming g: r_i = c_i - C_i + J_q,i v +
-  // dt J_x,i xdot with v = dt (f + G a_pi), k n multiply-adds instead of
-  // k n m. Most steps keep a_pi (no row would be crossed within one period)
-  // and never form the rows or enter the solver. A non-finite input makes
-  // some residual non-finite (NaN propagates, Inf * 0 is NaN), so one check
-  // on r covers f, G, c, J and xdot.
-  double* v = S.v.data();
-  for (int l = 0; l < n; ++l) {
-    double s = f ? f[l] : 0.0;
-    if (mod.g_form == GForm::Diagonal) {
-      s += G[l] * a_pi[l];
-    } else {
-      for (int j = 0; j < m; ++j) s += G[size_t(l) * m + j] * a_pi[j];
-    }
-    v[l] = dt * s;
-  }
-  bool finite = true, keep = true;
+  double* dtG = S.dtG.data();
+  if (mod.g_form == GForm::Diagonal)
+    for (int j = 0; j < m; ++j) dtG[j] = dt * G[j];
   for (int i = 0; i < k; ++i) {
     const double* row = Jq + size_t(i) * n;
-    double ri = c[i] - mod.threshold[i];
-    for (int l = 0; l < n; ++l) ri += row[l] * v[l];
-    double fx = 0.0;
-    for (int q = 0; q < p; ++q) fx += Jx[size_t(i) * p + q] * xd[q];
-    ri += dt * fx;
-    r[i] = ri;
-    finite = finite && std::isfinite(ri);
-    keep = keep && ri <= kSafeLayerFeasTol;
-  }
-  if (finite && !keep) {
-    double* dtG = S.dtG.data();
-    if (mod.g_form == GForm::Diagonal)
-      for (int j = 0; j < m; ++j) dtG[j] = dt * G[j];
-    for (int i = 0; i < k; ++i) {
-      const double* row = Jq + size_t(i) * n;
-      double* gi = g + size_t(i) * m;
-      double F = 0.0;
-      if (mod.g_form == GForm::Diagonal) {
-        for (int j = 0; j < m; ++j) gi[j] = row[j] * dtG[j];
-      } else {
-        std::fill_n(gi, m, 0.0);
-        for (int l = 0; l < n; ++l) {
-          const double jl = dt * row[l];
-          for (int j = 0; j < m; ++j) gi[j] += jl * G[size_t(l) * m + j];
-        }
+    double* gi = g + size_t(i) * m;
+    double F = 0.0;
+    if (mod.g_form == GForm::Diagonal) {
+      for (int j = 0; j < m; ++j) gi[j] = row[j] * dtG[j];
+    } else {
+      std::fill_n(gi, m, 0.0);
+      for (int l = 0; l < n; ++l) {
+        const double jl = dt * row[l];
+        for (int j = 0; j < m; ++j) gi[j] += jl * G[size_t(l) * m + j];
       }
-      if (f)
-        for (int l = 0; l < n; ++l) F += row[l] * f[l];
-      for (int q = 0; q < p; ++q) F += Jx[size_t(i) * p + q] * xd[q];
-      h[i] = mod.threshold[i] - c[i] - dt * F;
     }
+    if (f)
+      for (int l = 0; l < n; ++l) F += row[l] * f[l];
+    for (int q = 0; q < p; ++q) F += Jx[size_t(i) * p + q] * xd[q];
+    h[i] = mod.threshold[i] - c[i] - dt * F;
   }
   double* a = O.a.data() + size_t(e) * m;
-  int iters = 0;
-  uint8_t* rows = store_rows ? O.active_rows.data() + size_t(e) * k : nullptr;
-  if (!finite) {
-    std::fill_n(a, m, 0.0);
-    status |= kSafeLayerModelNonFinite;
-    if (rows) std::fill_n(rows, k, uint8_t{0});
-  } else if (keep) {
-    std::copy_n(a_pi, m, a);
-  } else {
-    const safelayer_qp::Result res = safelayer_qp::solve(m, k, g, h, a_pi, a, nullptr, S.qp);
-    status |= res.status;
-    iters = res.iterations;
-    for (int i = 0; i < k; ++i) {
-      double ri = -h[i];
-      for (int j = 0; j < m; ++j) ri += g[size_t(i) * m + j] * a[j];
-      r[i] = ri;
-    }
+  const safelayer_qp::Result res = safelayer_qp::solve(m, k, g, h, a_pi, a, nullptr, S.qp);
+  for (int i = 0; i < k; ++i) {
+    double ri = -h[i];
+    for (int j = 0; j < m; ++j) ri += g[size_t(i) * m + j] * a[j];
+    r[i] = ri;
   }
-  double corr = 0.0;
-  for (int j = 0; j < m; ++j) corr += (a[j] - a_pi[j]) * (a[j] - a_pi[j]);
-  int active = 0;
-  if (finite)
-    for (int i = 0; i < k; ++i) {
-      const bool act = r[i] >= -kSafeLayerFeasTol;
-      active += act;
-      if (rows) rows[i] = act;
-    }
-  O.correction[e] = std::sqrt(corr);
-  O.active[e] = active;
-  O.iterations[e] = iters;
-  O.status[e] = status;
+  finish_env(mod, O, e, a_pi, r, true, res.iterations, status | res.status, store_rows);
 }
 
 }  // namespace
@@ -161,7 +195,29 @@ void safelayer_range(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLay
   if (begin >= end) return;
   KernelScratch& S = thread_scratch();
   S.setup(mod);
-  for (int e = begin; e < end; ++e) solve_env(mod, B, O, e, S, opt.store_active_rows);
+  const int m = mod.m, k = mod.k;
+  double* a_pi = S.a_pi.data();
+  double* r = S.r.data();
+  for (int lo = begin; lo < end; lo += lanes::kLanes) {
+    const int count = std::min(lanes::kLanes, end - lo);
+    const LaneScreen sc = screen_lanes(mod, B, lo, count, S);
+    for (int l = 0; l < count; ++l) {
+      const int e = lo + l;
+      for (int j = 0; j < m; ++j) a_pi[j] = S.l_api[j][l];
+      const uint32_t status = (sc.alpha_bad >> l & 1) ? kSafeLayerAlphaNonFinite : 0u;
+      double* a = O.a.data() + size_t(e) * m;
+      if (!(sc.finite >> l & 1)) {
+        std::fill_n(a, m, 0.0);
+        finish_env(mod, O, e, a_pi, r, false, 0, status | kSafeLayerModelNonFinite, opt.store_active_rows);
+      } else if (sc.keep >> l & 1) {
+        std::copy_n(a_pi, m, a);
+        for (int i = 0; i < k; ++i) r[i] = S.l_r[i][l];
+        finish_env(mod, O, e, a_pi, r, true, 0, status, opt.store_active_rows);
+      } else {
+        solve_env(mod, B, O, e, a_pi, status, S, opt.store_active_rows);
+      }
+    }
+  }
 }
 
 void safelayer_batch(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatch& O,
