@@ -85,4 +85,38 @@ static inline vd load_strided(const double* base, int stride, int count) {
   return v;
 }
 
+// dst[idx][l] = src[l][idx] for idx < count: `count` consecutive doubles of
+// each lane's env into lane vectors. With AVX-512 whole 8 x 8 tiles are
+// transposed in registers (8 loads, 24 shuffles, 8 stores instead of 64
+// scalar moves); the scalar loop does the rest.
+static inline void gather_rows(const double* const src[kLanes], int count, vd* dst) {
+  int idx = 0;
+#if defined(__AVX512F__)
+  static_assert(kLanes == 8);
+  for (; idx + 8 <= count; idx += 8) {
+    __m512d r[8];
+    for (int l = 0; l < 8; ++l) r[l] = _mm512_loadu_pd(src[l] + idx);
+    // pairs, then 128-bit blocks, then 256-bit halves
+    const __m512d t0 = _mm512_unpacklo_pd(r[0], r[1]), t1 = _mm512_unpackhi_pd(r[0], r[1]);
+    const __m512d t2 = _mm512_unpacklo_pd(r[2], r[3]), t3 = _mm512_unpackhi_pd(r[2], r[3]);
+    const __m512d t4 = _mm512_unpacklo_pd(r[4], r[5]), t5 = _mm512_unpackhi_pd(r[4], r[5]);
+    const __m512d t6 = _mm512_unpacklo_pd(r[6], r[7]), t7 = _mm512_unpackhi_pd(r[6], r[7]);
+    const __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
+    const __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
+    const __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
+    const __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
+    dst[idx + 0] = (vd)_mm512_shuffle_f64x2(u0, u4, 0x88);
+    dst[idx + 1] = (vd)_mm512_shuffle_f64x2(u1, u5, 0x88);
+    dst[idx + 2] = (vd)_mm512_shuffle_f64x2(u2, u6, 0x88);
+    dst[idx + 3] = (vd)_mm512_shuffle_f64x2(u3, u7, 0x88);
+    dst[idx + 4] = (vd)_mm512_shuffle_f64x2(u0, u4, 0xDD);
+    dst[idx + 5] = (vd)_mm512_shuffle_f64x2(u1, u5, 0xDD);
+    dst[idx + 6] = (vd)_mm512_shuffle_f64x2(u2, u6, 0xDD);
+    dst[idx + 7] = (vd)_mm512_shuffle_f64x2(u3, u7, 0xDD);
+  }
+#endif
+  for (; idx < count; ++idx)
+    for (int l = 0; l < kLanes; ++l) dst[idx][l] = src[l][idx];
+}
+
 }  // namespace atacom::lanes

@@ -22,12 +22,15 @@ constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count indepen
 struct KernelScratch {
   safelayer_qp::Scratch qp;
   std::vector<double> g, h, r, a_pi, dtG;
-  std::vector<lanes::vd> l_api, l_v, l_r, l_xd;  // lane block: a_pi (m), v (n), residuals (k), xdot (p)
+  // lane block: a_pi (m), v (n), residuals (k), inputs J_q, f, G, J_x, xdot
+  std::vector<lanes::vd> l_api, l_v, l_r, l_in;
   void setup(const SafeLayerModel& mod) {
-    if (l_api.size() < size_t(mod.m)) l_api.resize(mod.m);
-    if (l_v.size() < size_t(mod.n)) l_v.resize(mod.n);
-    if (l_r.size() < size_t(mod.k)) l_r.resize(mod.k);
-    if (l_xd.size() < size_t(mod.p)) l_xd.resize(mod.p);
+    const size_t n = mod.n, m = mod.m, k = mod.k, p = mod.p;
+    if (l_api.size() < m) l_api.resize(m);
+    if (l_v.size() < n) l_v.resize(n);
+    if (l_r.size() < k) l_r.resize(k);
+    const size_t in = k * n + n + (mod.g_form == GForm::Diagonal ? n : n * m) + k * p + p;
+    if (l_in.size() < in) l_in.resize(in);
     if (g.size() < size_t(mod.k) * mod.m) g.resize(size_t(mod.k) * mod.m);
     if (h.size() < size_t(mod.k)) h.resize(mod.k), r.resize(mod.k);
     if (dtG.size() < size_t(mod.m)) dtG.resize(mod.m);
@@ -67,6 +70,7 @@ struct LaneScreen {
 LaneScreen screen_lanes(const SafeLayerModel& mod, const ProjectorBatch& B, int lo, int count, KernelScratch& S) {
   using lanes::vd;
   using lanes::vm;
+  constexpr int L = lanes::kLanes;
   const int n = mod.n, m = mod.m, k = mod.k, p = mod.p;
   const bool diag = mod.g_form == GForm::Diagonal;
   const int gsz = diag ? n : n * m;
@@ -74,35 +78,62 @@ LaneScreen screen_lanes(const SafeLayerModel& mod, const ProjectorBatch& B, int 
   vd* api = S.l_api.data();
   vd* v = S.l_v.data();
   vd* r = S.l_r.data();
-  vd* xd = S.l_xd.data();
+  vd* T = S.l_in.data();  // transposed inputs, reused per array
+  const double* src[L];
+  auto gather = [&](const double* base, int per_env, vd* dst) {
+    for (int l = 0; l < L; ++l) src[l] = base + size_t(lo + std::min(l, count - 1)) * per_env;
+    lanes::gather_rows(src, per_env, dst);
+  };
   vm bad = vm{};
+  gather(B.alpha.data(), m, api);
   for (int j = 0; j < m; ++j) {
-    const vd al = lanes::load_strided(B.alpha.data() + size_t(lo) * m + j, m, count);
+    const vd al = api[j];
     const vm fin = (al - al) == 0.0;
     bad |= ~fin;
     api[j] = lanes::vclamp(lanes::vsel(fin, al, vd{}), -1.0, 1.0);
   }
-  const double* G = B.G.data() + size_t(lo) * gsz;
-  const double* f = mod.has_drift ? B.f.data() + size_t(lo) * n : nullptr;
+  vd* f = T + size_t(k) * n;  // after J_q's slot
+  vd* Gt = f + n;
+  if (mod.has_drift) gather(B.f.data(), n, f);
+  gather(B.G.data(), gsz, Gt);
   for (int l = 0; l < n; ++l) {
-    vd s = f ? lanes::load_strided(f + l, n, count) : vd{};
+    vd s = mod.has_drift ? f[l] : vd{};
     if (diag) {
-      s += lanes::load_strided(G + l, gsz, count) * api[l];
+      s += Gt[l] * api[l];
     } else {
-      for (int j = 0; j < m; ++j) s += lanes::load_strided(G + size_t(l) * m + j, gsz, count) * api[j];
+      for (int j = 0; j < m; ++j) s += Gt[size_t(l) * m + j] * api[j];
     }
     v[l] = dt * s;
   }
-  for (int q = 0; q < p; ++q) xd[q] = lanes::load_strided(B.xdot.data() + size_t(lo) * p + q, p, count);
-  const double* Jq = B.Jq.data() + size_t(lo) * k * n;
-  const double* Jx = p ? B.Jx.data() + size_t(lo) * k * p : nullptr;
-  const double* c = B.c.data() + size_t(lo) * k;
+  gather(B.c.data(), k, r);
+  gather(B.Jq.data(), k * n, T);
+  vd* Jx = Gt + gsz;
+  vd* xd = Jx + size_t(k) * p;
+  if (p) {
+    gather(B.Jx.data(), k * p, Jx);
+    gather(B.xdot.data(), p, xd);
+  }
+  // Prefetch the block after next (at large N the batch streams from DRAM and
+  // eight envs' rows at once defeat the hardware prefetcher), spread over the
+  // row loop so the misses do not queue up at once.
+  const char* pf = nullptr;
+  const char* pf_end = nullptr;
+  int pf_per_row = 0;
+  if (lo + 3 * L <= B.N) {
+    pf = reinterpret_cast<const char*>(B.Jq.data() + size_t(lo + 2 * L) * k * n);
+    pf_end = reinterpret_cast<const char*>(B.Jq.data() + size_t(lo + 3 * L) * k * n);
+    pf_per_row = int((pf_end - pf) / 64) / k + 1;
+    const double* nxt[] = {B.c.data() + size_t(lo + 2 * L) * k, B.G.data() + size_t(lo + 2 * L) * gsz,
+                           B.alpha.data() + size_t(lo + 2 * L) * m};
+    for (const double* q : nxt) __builtin_prefetch(q, 0, 2);
+  }
   vm fin = ~vm{}, keep = ~vm{};
   for (int i = 0; i < k; ++i) {
-    vd ri = lanes::load_strided(c + i, k, count) - mod.threshold[i];
-    for (int l = 0; l < n; ++l) ri += lanes::load_strided(Jq + size_t(i) * n + l, k * n, count) * v[l];
+    for (int t = 0; t < pf_per_row && pf < pf_end; ++t, pf += 64) __builtin_prefetch(pf, 0, 2);
+    vd ri = r[i] - mod.threshold[i];
+    for (int l = 0; l < n; ++l) ri += T[size_t(i) * n + l] * v[l];
     vd fx = vd{};
-    for (int q = 0; q < p; ++q) fx += lanes::load_strided(Jx + size_t(i) * p + q, k * p, count) * xd[q];
+    for (int q = 0; q < p; ++q) fx += Jx[size_t(i) * p + q] * xd[q];
     ri += dt * fx;
     r[i] = ri;
     fin &= (ri - ri) == 0.0;

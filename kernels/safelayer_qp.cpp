@@ -325,9 +325,12 @@ void Scratch::setup(int m, int k) {
   grow(kept, k);
   grow(mu, nc);
   grow(a2, m);
+  grow(planar, 3 * size_t(nc));
+  grow(hk, k);
 }
 
-Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S) {
+Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S,
+             const Options& opt) {
   S.setup(m, k);
   Result R;
   if (mult) std::fill_n(mult, k + 2 * m, 0.0);
@@ -370,16 +373,25 @@ Result solve(int m, int k, const double* g, const double* h, const double* a_pi,
       return R;
     }
   }
-  // 3. The exact QP.
-  for (int c = 0; c < kk; ++c) {
-    const int i = S.kept[c];
-    for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(i) * m + j] / S.gscale[c];
-    S.hn[c] = h[i] / S.gscale[c];
-  }
+  // 3. The exact QP: enumeration for m <= 2, else NNLS on the LDP.
+  const bool planar = opt.planar && m <= 2 && kk <= kPlanarMaxRows;
   int iters = 0;
   bool limit = false;
-  const bool ok = ldp(m, kk, S.gn.data(), S.hn.data(), a_pi, a, S.mu.data(), S, &iters, &limit);
-  if (ok && into_box(m, a) && max_row_violation(m, kk, S.kept.data(), g, h, a) <= kTol) {
+  bool ok;
+  if (planar) {
+    for (int c = 0; c < kk; ++c) S.hk[c] = h[S.kept[c]];
+    iters = 1;
+    ok = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a, S.mu.data(), S);
+  } else {
+    for (int c = 0; c < kk; ++c) {
+      const int i = S.kept[c];
+      for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(i) * m + j] / S.gscale[c];
+      S.hn[c] = h[i] / S.gscale[c];
+    }
+    ok = ldp(m, kk, S.gn.data(), S.hn.data(), a_pi, a, S.mu.data(), S, &iters, &limit) && into_box(m, a) &&
+         max_row_violation(m, kk, S.kept.data(), g, h, a) <= kTol;
+  }
+  if (ok) {
     R.iterations = 1 + iters;
     R.status = stuck_bit | (limit ? kSafeLayerIterationLimit : 0u);
     if (mult) {
@@ -395,13 +407,20 @@ Result solve(int m, int k, const double* g, const double* h, const double* a_pi,
     const int i = S.kept[c];
     double r = 0.0;
     for (int j = 0; j < m; ++j) r += g[size_t(i) * m + j] * a[j];
-    S.h2[c] = std::max(h[S.kept[c]], r) / S.gscale[c];
+    S.hk[c] = std::max(h[i], r);
+    S.h2[c] = S.hk[c] / S.gscale[c];
   }
   bool limit2 = false;
   double* a2 = S.a2.data();
-  if (ldp(m, kk, S.gn.data(), S.h2.data(), a_pi, a2, nullptr, S, &iters, &limit2) && into_box(m, a2) &&
-      violation_objective(m, kk, S.kept.data(), g, h, a2) <=
-          violation_objective(m, kk, S.kept.data(), g, h, a) * (1.0 + 1e-9) + 1e-300)
+  bool relaxed_ok;
+  if (planar) {
+    ++iters;
+    relaxed_ok = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a2, nullptr, S);
+  } else {
+    relaxed_ok = ldp(m, kk, S.gn.data(), S.h2.data(), a_pi, a2, nullptr, S, &iters, &limit2) && into_box(m, a2);
+  }
+  if (relaxed_ok && violation_objective(m, kk, S.kept.data(), g, h, a2) <=
+                        violation_objective(m, kk, S.kept.data(), g, h, a) * (1.0 + 1e-9) + 1e-300)
     std::copy_n(a2, m, a);
   R.iterations = 1 + iters;
   const bool violated = max_row_violation(m, kk, S.kept.data(), g, h, a) > kTol;
