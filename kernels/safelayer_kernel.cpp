@@ -18,6 +18,7 @@ namespace atacom {
 namespace {
 
 constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count independent)
+constexpr int kPrefetchBlocks = 2;  // lane blocks ahead
 
 struct KernelScratch {
   safelayer_qp::Scratch qp;
@@ -65,6 +66,7 @@ void check_batch(const SafeLayerModel& mod, const ProjectorBatch& B, const SafeL
 // Idle lanes repeat the last env. Bit masks per lane: keep, finite, alpha bad.
 struct LaneScreen {
   uint32_t keep = 0, finite = 0, alpha_bad = 0;
+  int active[lanes::kLanes];  // rows active at a_pi (r_i >= -tol), for the kept lanes
 };
 
 LaneScreen screen_lanes(const SafeLayerModel& mod, const ProjectorBatch& B, int lo, int count, KernelScratch& S) {
@@ -113,23 +115,45 @@ LaneScreen screen_lanes(const SafeLayerModel& mod, const ProjectorBatch& B, int 
     gather(B.Jx.data(), k * p, Jx);
     gather(B.xdot.data(), p, xd);
   }
-  // Prefetch the block after next (at large N the batch streams from DRAM and
-  // eight envs' rows at once defeat the hardware prefetcher), spread over the
-  // row loop so the misses do not queue up at once.
-  const char* pf = nullptr;
-  const char* pf_end = nullptr;
-  int pf_per_row = 0;
-  if (lo + 3 * L <= B.N) {
-    pf = reinterpret_cast<const char*>(B.Jq.data() + size_t(lo + 2 * L) * k * n);
-    pf_end = reinterpret_cast<const char*>(B.Jq.data() + size_t(lo + 3 * L) * k * n);
-    pf_per_row = int((pf_end - pf) / 64) / k + 1;
-    const double* nxt[] = {B.c.data() + size_t(lo + 2 * L) * k, B.G.data() + size_t(lo + 2 * L) * gsz,
-                           B.alpha.data() + size_t(lo + 2 * L) * m};
-    for (const double* q : nxt) __builtin_prefetch(q, 0, 2);
+  // Prefetch every input of the block kPrefetchBlocks ahead: at large N the
+  // batch streams from memory and eight envs' rows at once defeat the
+  // hardware prefetcher. Spread over the row loop so the misses do not queue
+  // up at once; the solver's work on this block's other envs hides them.
+  struct Range {
+    const char *p, *end;
+  } pf[6];
+  int npf = 0, cur = 0, pf_per_row = 0;
+  const int ahead = lo + kPrefetchBlocks * L;
+  if (ahead + L <= B.N) {
+    auto add = [&](const double* base, size_t per_env) {
+      if (per_env == 0) return;
+      pf[npf++] = {reinterpret_cast<const char*>(base + size_t(ahead) * per_env),
+                   reinterpret_cast<const char*>(base + size_t(ahead + L) * per_env)};
+    };
+    add(B.Jq.data(), size_t(k) * n);
+    add(B.c.data(), k);
+    add(B.G.data(), gsz);
+    add(B.alpha.data(), m);
+    if (mod.has_drift) add(B.f.data(), n);
+    if (p) add(B.Jx.data(), size_t(k) * p), add(B.xdot.data(), p);
+    size_t lines = 0;
+    for (int t = 0; t < npf; ++t) lines += size_t(pf[t].end - pf[t].p) / 64 + 1;
+    pf_per_row = int(lines / size_t(k)) + 1;
   }
-  vm fin = ~vm{}, keep = ~vm{};
+  auto prefetch = [&](int count_lines) {
+    while (count_lines > 0 && cur < npf) {
+      if (pf[cur].p >= pf[cur].end) {
+        ++cur;
+        continue;
+      }
+      __builtin_prefetch(pf[cur].p, 0, 2);
+      pf[cur].p += 64;
+      --count_lines;
+    }
+  };
+  vm fin = ~vm{}, keep = ~vm{}, active = vm{};
   for (int i = 0; i < k; ++i) {
-    for (int t = 0; t < pf_per_row && pf < pf_end; ++t, pf += 64) __builtin_prefetch(pf, 0, 2);
+    prefetch(pf_per_row);
     vd ri = r[i] - mod.threshold[i];
     for (int l = 0; l < n; ++l) ri += T[size_t(i) * n + l] * v[l];
     vd fx = vd{};
@@ -138,12 +162,14 @@ LaneScreen screen_lanes(const SafeLayerModel& mod, const ProjectorBatch& B, int 
     r[i] = ri;
     fin &= (ri - ri) == 0.0;
     keep &= ri <= kSafeLayerFeasTol;
+    active -= ri >= -kSafeLayerFeasTol;
   }
   LaneScreen out;
   for (int l = 0; l < count; ++l) {
     out.keep |= uint32_t(keep[l] != 0) << l;
     out.finite |= uint32_t(fin[l] != 0) << l;
     out.alpha_bad |= uint32_t(bad[l] != 0) << l;
+    out.active[l] = static_cast<int>(active[l]);
   }
   return out;
 }
@@ -242,8 +268,12 @@ void safelayer_range(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLay
         finish_env(mod, O, e, a_pi, r, false, 0, status | kSafeLayerModelNonFinite, opt.store_active_rows);
       } else if (sc.keep >> l & 1) {
         std::copy_n(a_pi, m, a);
-        for (int i = 0; i < k; ++i) r[i] = S.l_r[i][l];
-        finish_env(mod, O, e, a_pi, r, true, 0, status, opt.store_active_rows);
+        O.correction[e] = 0.0;
+        O.active[e] = sc.active[l];
+        O.iterations[e] = 0;
+        O.status[e] = status;
+        if (opt.store_active_rows)
+          for (int i = 0; i < k; ++i) O.active_rows[size_t(e) * k + i] = S.l_r[i][l] >= -kSafeLayerFeasTol;
       } else {
         solve_env(mod, B, O, e, a_pi, status, S, opt.store_active_rows);
       }

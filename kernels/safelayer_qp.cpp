@@ -331,7 +331,6 @@ void Scratch::setup(int m, int k) {
 
 Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S,
              const Options& opt) {
-  S.setup(m, k);
   Result R;
   if (mult) std::fill_n(mult, k + 2 * m, 0.0);
   // 1. a_pi itself; the row farthest outside (distance to its half-space).

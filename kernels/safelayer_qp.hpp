@@ -33,6 +33,7 @@ struct Options {
 };
 
 // min 1/2 |a - a_pi|^2  s.t.  g a <= h (k rows),  -1 <= a <= 1.  a_pi inside the box.
+// S must have been set up for (m, k) (the kernel does it once per range).
 // mult (k + 2m) optional: KKT multipliers (zero when infeasible).
 Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S,
              const Options& opt = {});
