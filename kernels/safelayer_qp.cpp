@@ -194,7 +194,7 @@ bool ldp(int m, int kk, const double* gn, const double* hn, const double* a_pi, 
   return true;
 }
 
-double max_row_violation(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
+[[gnu::always_inline]] inline double max_row_violation(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
   double mx = -INFINITY;
   for (int c = 0; c < kk; ++c) {
     const int i = kept[c];
@@ -206,14 +206,14 @@ double max_row_violation(int m, int kk, const int* kept, const double* g, const 
 }
 
 // Inside the box up to kBoxSlack: clip and return true.
-bool into_box(int m, double* a) {
+[[gnu::always_inline]] inline bool into_box(int m, double* a) {
   for (int j = 0; j < m; ++j)
     if (!(std::fabs(a[j]) <= 1.0 + kBoxSlack)) return false;
   for (int j = 0; j < m; ++j) a[j] = std::clamp(a[j], -1.0, 1.0);
   return true;
 }
 
-double violation_objective(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
+[[gnu::always_inline]] inline double violation_objective(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
   double s = 0.0;
   for (int c = 0; c < kk; ++c) {
     const int i = kept[c];
@@ -225,7 +225,7 @@ double violation_objective(int m, int kk, const int* kept, const double* g, cons
 }
 
 // Projected Newton on 1/2 sum max(0, g a - h)^2 over the box, from a (inside).
-void least_violation_newton(int m, int kk, const int* kept, const double* g, const double* h, double* a, Scratch& S,
+[[gnu::always_inline]] inline void least_violation_newton(int m, int kk, const int* kept, const double* g, const double* h, double* a, Scratch& S,
                             int* iters) {
   double* grad = S.grad.data();
   double* H = S.H.data();
@@ -329,8 +329,14 @@ void Scratch::setup(int m, int k) {
   grow(hk, k);
 }
 
-Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S,
-             const Options& opt) {
+namespace {
+
+// The solver with m a compile-time constant when M > 0 (loops over m unroll
+// in the small helpers inlined here); M = 0 for any m.
+template <int M>
+Result solve_m(int m_any, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult,
+               Scratch& S, const Options& opt) {
+  const int m = M > 0 ? M : m_any;
   Result R;
   if (mult) std::fill_n(mult, k + 2 * m, 0.0);
   // 1. a_pi itself; the row farthest outside (distance to its half-space).
@@ -425,6 +431,15 @@ Result solve(int m, int k, const double* g, const double* h, const double* a_pi,
   const bool violated = max_row_violation(m, kk, S.kept.data(), g, h, a) > kTol;
   R.status = stuck_bit | (violated ? kSafeLayerInfeasible : 0u) | (limit || limit2 ? kSafeLayerIterationLimit : 0u);
   return R;
+}
+
+}  // namespace
+
+Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S,
+             const Options& opt) {
+  if (m == 2) return solve_m<2>(m, k, g, h, a_pi, a, mult, S, opt);
+  if (m == 1) return solve_m<1>(m, k, g, h, a_pi, a, mult, S, opt);
+  return solve_m<0>(m, k, g, h, a_pi, a, mult, S, opt);
 }
 
 }  // namespace atacom::safelayer_qp

@@ -35,10 +35,9 @@ struct Con {
   double n0, n1, r;  // unit normal (n1 = 0 for m = 1), residual n.a_pi - h at a_pi
 };
 
-}  // namespace
-
-bool planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
-                  const double* a_pi, double* a, double* mu, Scratch& S) {
+template <int m>
+bool planar_m(int kk, const int* kept, const double* g, const double* hk, const double* gscale, const double* a_pi,
+              double* a, double* mu, Scratch& S) {
   const int M = kk + 2 * m;
   Con* con = reinterpret_cast<Con*>(S.planar.data());
   double far = 0.0;  // largest distance of a violated row from a_pi
@@ -96,7 +95,7 @@ bool planar_solve(int m, int kk, const int* kept, const double* g, const double*
   }
   // Vertices (m = 2): s a violated row, t any other constraint (a violated
   // row t < s was paired with s already).
-  if (m == 2)
+  if constexpr (m == 2)
     for (int s = 0; s < kk; ++s) {
       const Con& p = con[s];
       if (!(p.r > 0.0)) continue;
@@ -122,6 +121,14 @@ bool planar_solve(int m, int kk, const int* kept, const double* g, const double*
     if (best_t >= 0) mu[best_t] = best_l[1];
   }
   return true;
+}
+
+}  // namespace
+
+bool planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
+                  const double* a_pi, double* a, double* mu, Scratch& S) {
+  return m == 2 ? planar_m<2>(kk, kept, g, hk, gscale, a_pi, a, mu, S)
+                : planar_m<1>(kk, kept, g, hk, gscale, a_pi, a, mu, S);
 }
 
 }  // namespace atacom::safelayer_qp
