@@ -378,16 +378,20 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
       return R;
     }
   }
-  // 3. The exact QP: enumeration for m <= 2, else NNLS on the LDP.
-  const bool planar = opt.planar && m <= 2 && kk <= kPlanarMaxRows;
+  // 3. The exact QP: enumeration for m <= 2, else (or when the enumeration
+  // cannot decide) NNLS on the LDP.
+  bool planar = opt.planar && m <= 2 && kk <= kPlanarMaxRows;
   int iters = 0;
   bool limit = false;
-  bool ok;
+  bool ok = false;
   if (planar) {
     for (int c = 0; c < kk; ++c) S.hk[c] = h[S.kept[c]];
     iters = 1;
-    ok = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a, S.mu.data(), S);
-  } else {
+    const int res = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a, S.mu.data(), S);
+    ok = res == 1;
+    planar = res != -1;
+  }
+  if (!planar) {
     for (int c = 0; c < kk; ++c) {
       const int i = S.kept[c];
       for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(i) * m + j] / S.gscale[c];
@@ -417,13 +421,17 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
   }
   bool limit2 = false;
   double* a2 = S.a2.data();
-  bool relaxed_ok;
+  int relaxed = -1;  // 1 solved, 0 not, -1 ask NNLS
   if (planar) {
     ++iters;
-    relaxed_ok = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a2, nullptr, S);
-  } else {
-    relaxed_ok = ldp(m, kk, S.gn.data(), S.h2.data(), a_pi, a2, nullptr, S, &iters, &limit2) && into_box(m, a2);
+    relaxed = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a2, nullptr, S);
+    if (relaxed == -1)
+      for (int c = 0; c < kk; ++c)
+        for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(S.kept[c]) * m + j] / S.gscale[c];
   }
+  if (relaxed == -1)
+    relaxed = ldp(m, kk, S.gn.data(), S.h2.data(), a_pi, a2, nullptr, S, &iters, &limit2) && into_box(m, a2);
+  const bool relaxed_ok = relaxed == 1;
   if (relaxed_ok && violation_objective(m, kk, S.kept.data(), g, h, a2) <=
                         violation_objective(m, kk, S.kept.data(), g, h, a) * (1.0 + 1e-9) + 1e-300)
     std::copy_n(a2, m, a);

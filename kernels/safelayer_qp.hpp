@@ -42,7 +42,7 @@ Result solve(int m, int k, const double* g, const double* h, const double* a_pi,
 // hk[c], |g| = gscale[c]) by enumerating candidate active sets. Writes a and,
 // when mu != nullptr, the multipliers of [kept rows on unit normals, a <= 1,
 // -a <= 1]. Returns false when no action in the box satisfies every row.
-bool planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
+int planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
                   const double* a_pi, double* a, double* mu, Scratch& S);
 
 }  // namespace atacom::safelayer_qp

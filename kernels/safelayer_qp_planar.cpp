@@ -28,6 +28,10 @@ namespace {
 constexpr double kTol = kSafeLayerFeasTol;
 constexpr double kBoxSlack = 1e-9;
 constexpr double kParallel = 1e-12;  // |sin| of the angle below which two lines count as parallel
+// A vertex of lines closer than this to parallel is ill-conditioned (its
+// rounding error ~ 1e-16 / |sin| nears the tolerance): when no candidate is
+// feasible and such a pair was seen, the enumeration does not decide.
+constexpr double kIllConditioned = 1e-6;
 
 // Constraint t of the planar problem: t < kk a kept row (unit normal), then
 // a_j <= 1 and -a_j <= 1 for each j.
@@ -36,7 +40,7 @@ struct Con {
 };
 
 template <int m>
-bool planar_m(int kk, const int* kept, const double* g, const double* hk, const double* gscale, const double* a_pi,
+int planar_m(int kk, const int* kept, const double* g, const double* hk, const double* gscale, const double* a_pi,
               double* a, double* mu, Scratch& S) {
   const int M = kk + 2 * m;
   Con* con = reinterpret_cast<Con*>(S.planar.data());
@@ -60,7 +64,7 @@ bool planar_m(int kk, const int* kept, const double* g, const double* hk, const 
   if (far_row < 0) {  // no row violated (the relaxed rows of the infeasible case can be): a_pi
     std::copy_n(a_pi, m, a);
     if (mu) std::fill_n(mu, M, 0.0);
-    return true;
+    return 1;
   }
   // A candidate at distance d from a_pi violates the farthest row by at least
   // |g| (far - d): skip it when that exceeds the tolerance.
@@ -70,6 +74,7 @@ bool planar_m(int kk, const int* kept, const double* g, const double* hk, const 
   int best_s = -1, best_t = -1;
   double best_l[2] = {0.0, 0.0};
   double x[2], xb[2] = {0.0, 0.0};
+  bool ill = false;
   auto feasible = [&](const double* d) {
     for (int j = 0; j < m; ++j) {
       x[j] = a_pi[j] - d[j];
@@ -103,6 +108,7 @@ bool planar_m(int kk, const int* kept, const double* g, const double* hk, const 
         if (t == s || (t < s && con[t].r > 0.0)) continue;
         const Con& q = con[t];
         const double D = p.n0 * q.n1 - p.n1 * q.n0;
+        ill = ill || !(std::fabs(D) > kIllConditioned);
         if (!(std::fabs(D) > kParallel)) continue;
         // [p; q] d = [p.r; q.r], then d = lp p + lq q.
         const double d[2] = {(p.r * q.n1 - q.r * p.n1) / D, (p.n0 * q.r - q.n0 * p.r) / D};
@@ -113,19 +119,19 @@ bool planar_m(int kk, const int* kept, const double* g, const double* hk, const 
         if (feasible(d)) best = d2, best_s = s, best_t = t, best_l[0] = lp, best_l[1] = lq, xb[0] = x[0], xb[1] = x[1];
       }
     }
-  if (best_s < 0) return false;
+  if (best_s < 0) return ill ? -1 : 0;
   std::copy_n(xb, m, a);
   if (mu) {
     std::fill_n(mu, M, 0.0);
     mu[best_s] = best_l[0];
     if (best_t >= 0) mu[best_t] = best_l[1];
   }
-  return true;
+  return 1;
 }
 
 }  // namespace
 
-bool planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
+int planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
                   const double* a_pi, double* a, double* mu, Scratch& S) {
   return m == 2 ? planar_m<2>(kk, kept, g, hk, gscale, a_pi, a, mu, S)
                 : planar_m<1>(kk, kept, g, hk, gscale, a_pi, a, mu, S);
