@@ -121,7 +121,7 @@ LaneScreen screen_lanes(const SafeLayerModel& mod, const ProjectorBatch& B, int 
   // up at once; the solver's work on this block's other envs hides them.
   struct Range {
     const char *p, *end;
-  } pf[6];
+  } pf[7];  // J_q, c, G, alpha, f, J_x, xdot
   int npf = 0, cur = 0, pf_per_row = 0;
   const int ahead = lo + kPrefetchBlocks * L;
   if (ahead + L <= B.N) {
