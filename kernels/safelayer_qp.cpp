@@ -194,7 +194,7 @@ bool ldp(int m, int kk, const double* gn, const double* hn, const double* a_pi, 
   return true;
 }
 
-double max_row_violation(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
+[[gnu::always_inline]] inline double max_row_violation(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
   double mx = -INFINITY;
   for (int c = 0; c < kk; ++c) {
     const int i = kept[c];
@@ -206,14 +206,14 @@ double max_row_violation(int m, int kk, const int* kept, const double* g, const 
 }
 
 // Inside the box up to kBoxSlack: clip and return true.
-bool into_box(int m, double* a) {
+[[gnu::always_inline]] inline bool into_box(int m, double* a) {
   for (int j = 0; j < m; ++j)
     if (!(std::fabs(a[j]) <= 1.0 + kBoxSlack)) return false;
   for (int j = 0; j < m; ++j) a[j] = std::clamp(a[j], -1.0, 1.0);
   return true;
 }
 
-double violation_objective(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
+[[gnu::always_inline]] inline double violation_objective(int m, int kk, const int* kept, const double* g, const double* h, const double* a) {
   double s = 0.0;
   for (int c = 0; c < kk; ++c) {
     const int i = kept[c];
@@ -225,7 +225,7 @@ double violation_objective(int m, int kk, const int* kept, const double* g, cons
 }
 
 // Projected Newton on 1/2 sum max(0, g a - h)^2 over the box, from a (inside).
-void least_violation_newton(int m, int kk, const int* kept, const double* g, const double* h, double* a, Scratch& S,
+[[gnu::always_inline]] inline void least_violation_newton(int m, int kk, const int* kept, const double* g, const double* h, double* a, Scratch& S,
                             int* iters) {
   double* grad = S.grad.data();
   double* H = S.H.data();
@@ -325,10 +325,18 @@ void Scratch::setup(int m, int k) {
   grow(kept, k);
   grow(mu, nc);
   grow(a2, m);
+  grow(planar, 3 * size_t(nc));
+  grow(hk, k);
 }
 
-Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S) {
-  S.setup(m, k);
+namespace {
+
+// The solver with m a compile-time constant when M > 0 (loops over m unroll
+// in the small helpers inlined here); M = 0 for any m.
+template <int M>
+Result solve_m(int m_any, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult,
+               Scratch& S, const Options& opt) {
+  const int m = M > 0 ? M : m_any;
   Result R;
   if (mult) std::fill_n(mult, k + 2 * m, 0.0);
   // 1. a_pi itself; the row farthest outside (distance to its half-space).
@@ -370,16 +378,29 @@ Result solve(int m, int k, const double* g, const double* h, const double* a_pi,
       return R;
     }
   }
-  // 3. The exact QP.
-  for (int c = 0; c < kk; ++c) {
-    const int i = S.kept[c];
-    for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(i) * m + j] / S.gscale[c];
-    S.hn[c] = h[i] / S.gscale[c];
-  }
+  // 3. The exact QP: enumeration for m <= 2, else (or when the enumeration
+  // cannot decide) NNLS on the LDP.
+  bool planar = opt.planar && m <= 2 && kk <= kPlanarMaxRows;
   int iters = 0;
   bool limit = false;
-  const bool ok = ldp(m, kk, S.gn.data(), S.hn.data(), a_pi, a, S.mu.data(), S, &iters, &limit);
-  if (ok && into_box(m, a) && max_row_violation(m, kk, S.kept.data(), g, h, a) <= kTol) {
+  bool ok = false;
+  if (planar) {
+    for (int c = 0; c < kk; ++c) S.hk[c] = h[S.kept[c]];
+    iters = 1;
+    const int res = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a, S.mu.data(), S);
+    ok = res == 1;
+    planar = res != -1;
+  }
+  if (!planar) {
+    for (int c = 0; c < kk; ++c) {
+      const int i = S.kept[c];
+      for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(i) * m + j] / S.gscale[c];
+      S.hn[c] = h[i] / S.gscale[c];
+    }
+    ok = ldp(m, kk, S.gn.data(), S.hn.data(), a_pi, a, S.mu.data(), S, &iters, &limit) && into_box(m, a) &&
+         max_row_violation(m, kk, S.kept.data(), g, h, a) <= kTol;
+  }
+  if (ok) {
     R.iterations = 1 + iters;
     R.status = stuck_bit | (limit ? kSafeLayerIterationLimit : 0u);
     if (mult) {
@@ -395,18 +416,38 @@ Result solve(int m, int k, const double* g, const double* h, const double* a_pi,
     const int i = S.kept[c];
     double r = 0.0;
     for (int j = 0; j < m; ++j) r += g[size_t(i) * m + j] * a[j];
-    S.h2[c] = std::max(h[S.kept[c]], r) / S.gscale[c];
+    S.hk[c] = std::max(h[i], r);
+    S.h2[c] = S.hk[c] / S.gscale[c];
   }
   bool limit2 = false;
   double* a2 = S.a2.data();
-  if (ldp(m, kk, S.gn.data(), S.h2.data(), a_pi, a2, nullptr, S, &iters, &limit2) && into_box(m, a2) &&
-      violation_objective(m, kk, S.kept.data(), g, h, a2) <=
-          violation_objective(m, kk, S.kept.data(), g, h, a) * (1.0 + 1e-9) + 1e-300)
+  int relaxed = -1;  // 1 solved, 0 not, -1 ask NNLS
+  if (planar) {
+    ++iters;
+    relaxed = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a2, nullptr, S);
+    if (relaxed == -1)
+      for (int c = 0; c < kk; ++c)
+        for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(S.kept[c]) * m + j] / S.gscale[c];
+  }
+  if (relaxed == -1)
+    relaxed = ldp(m, kk, S.gn.data(), S.h2.data(), a_pi, a2, nullptr, S, &iters, &limit2) && into_box(m, a2);
+  const bool relaxed_ok = relaxed == 1;
+  if (relaxed_ok && violation_objective(m, kk, S.kept.data(), g, h, a2) <=
+                        violation_objective(m, kk, S.kept.data(), g, h, a) * (1.0 + 1e-9) + 1e-300)
     std::copy_n(a2, m, a);
   R.iterations = 1 + iters;
   const bool violated = max_row_violation(m, kk, S.kept.data(), g, h, a) > kTol;
   R.status = stuck_bit | (violated ? kSafeLayerInfeasible : 0u) | (limit || limit2 ? kSafeLayerIterationLimit : 0u);
   return R;
+}
+
+}  // namespace
+
+Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S,
+             const Options& opt) {
+  if (m == 2) return solve_m<2>(m, k, g, h, a_pi, a, mult, S, opt);
+  if (m == 1) return solve_m<1>(m, k, g, h, a_pi, a, mult, S, opt);
+  return solve_m<0>(m, k, g, h, a_pi, a, mult, S, opt);
 }
 
 }  // namespace atacom::safelayer_qp

@@ -15,6 +15,7 @@ struct Scratch {
   // the reduced problem: kept rows, normalised
   std::vector<double> gn, hn, gscale, h2, x, grad, H, dir, trial, mu, a2;
   std::vector<int> kept;
+  std::vector<double> planar, hk;  // planar_solve: constraints (3 per row and bound), raw right-hand sides
   void setup(int m, int k);
 };
 
@@ -23,8 +24,25 @@ struct Result {
   int iterations = 0;
 };
 
+// The exact QP for m <= 2 (kernels/safelayer_qp_planar.cpp) uses at most
+// this many kept rows; beyond, the candidate vertices outnumber NNLS's work.
+constexpr int kPlanarMaxRows = 16;
+
+struct Options {
+  bool planar = true;  // false: NNLS for every m (tests compare the two)
+};
+
 // min 1/2 |a - a_pi|^2  s.t.  g a <= h (k rows),  -1 <= a <= 1.  a_pi inside the box.
+// S must have been set up for (m, k) (the kernel does it once per range).
 // mult (k + 2m) optional: KKT multipliers (zero when infeasible).
-Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S);
+Result solve(int m, int k, const double* g, const double* h, const double* a_pi, double* a, double* mult, Scratch& S,
+             const Options& opt = {});
+
+// m <= 2: the same QP on the kept rows (row kept[c] of g, right-hand side
+// hk[c], |g| = gscale[c]) by enumerating candidate active sets. Writes a and,
+// when mu != nullptr, the multipliers of [kept rows on unit normals, a <= 1,
+// -a <= 1]. Returns false when no action in the box satisfies every row.
+int planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
+                  const double* a_pi, double* a, double* mu, Scratch& S);
 
 }  // namespace atacom::safelayer_qp

@@ -9,8 +9,9 @@
 //   1. a_pi feasible: a = a_pi (0 iterations);
 //   2. Dalal's closed form a = a_pi - lambda g_i on the row farthest away,
 //      kept when it satisfies every row and the box (1 iteration);
-//   3. otherwise the exact least-distance QP (Lawson-Hanson NNLS on the LDP
-//      dual), bounded by 3 (k + 2m) iterations;
+//   3. otherwise the exact QP: for m <= 2 an enumeration of the candidate
+//      active sets (2 iterations), else the least-distance QP (Lawson-Hanson
+//      NNLS on the LDP dual), bounded by 3 (k + 2m) iterations;
 //   4. infeasible (no action in the box satisfies every row): the action in
 //      the box with the least squared row violation, status kSafeLayerInfeasible.
 // The inputs are those the ATACOM projector gets (ProjectorBatch's f, G, c,
