@@ -66,17 +66,21 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
   s += "#SBATCH --signal=B:USR1@" + std::to_string(o.presignal_s) + "\n#SBATCH --requeue\n";
   for (const auto& a : o.sbatch_args) s += "#SBATCH " + a + "\n";
   s += "# Written by atacom sweep --slurm. The sweep runs in the background so that bash runs the\n"
-       "# USR1 trap at once: every run writes a checkpoint and exits, then the task requeues itself.\n"
+       "# USR1 trap at once: every run writes a checkpoint and exits, then the task requeues itself\n"
+       "# (named as ARRAYJOB_TASK: the task, never the whole array).\n"
        "set -u\n"
-       "echo \"=== task ${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID} (job $SLURM_JOB_ID) on $(hostname) at $(date -u +%FT%TZ)\"\n";
+       "task=\"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\"\n"
+       "echo \"=== task $task (job $SLURM_JOB_ID, restart ${SLURM_RESTART_COUNT:-0}) on $(hostname) at $(date -u +%FT%TZ)\"\n";
   s += quote(o.exe) + " sweep " + quote(dir + "/spec.json") + " --out " + quote(dir) + " --slurm-task " +
        quote(tasks_file) + " --task-offset " + std::to_string(offset) + " &\n";
-  s += "child=$!\nrequeue=0\ntrap 'requeue=1; kill -USR1 $child' USR1\n"
+  // rc 0: every run of the task is done, nothing to requeue (the signal came too late to matter).
+  s += "child=$!\nrequeue=0\ntrap 'requeue=1; kill -USR1 $child 2>/dev/null' USR1\n"
        "wait $child; rc=$?\n"
        "while kill -0 $child 2>/dev/null; do wait $child; rc=$?; done\n"
-       "if [ $requeue = 1 ]; then\n"
-       "  echo \"=== USR1: runs checkpointed (exit $rc); requeueing $SLURM_JOB_ID\"\n"
-       "  scontrol requeue \"$SLURM_JOB_ID\"\n  exit 0\nfi\nexit $rc\n";
+       "if [ $requeue = 1 ] && [ $rc != 0 ]; then\n"
+       "  echo \"=== USR1: runs checkpointed (exit $rc); requeueing $task at $(date -u +%FT%TZ)\"\n"
+       "  scontrol requeue \"$task\" || { echo \"=== scontrol requeue $task failed\"; exit 75; }\n"
+       "  exit 0\nfi\nexit $rc\n";
   return s;
 }
 
@@ -104,7 +108,13 @@ std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::st
   for (const auto& j : jobs) {  // never two submissions of one sweep in the queue at once
     std::string out;
     const std::string id = j.at("job_id").get<std::string>();
-    if (capture("squeue -h -o %i -j " + quote(id), out) == 0 && out.find_first_not_of(" \n") != std::string::npos)
+    // Gone: rc 0 and nothing listed, or "Invalid job id" (past MinJobAge). Any other failure (a
+    // controller that does not answer also prints nothing) must not pass for "gone".
+    const int rc = capture("squeue -h -o %i -j " + quote(id), out);
+    if (rc != 0 && out.find("Invalid job id") == std::string::npos)
+      throw std::runtime_error("cannot tell whether job " + id + " of this sweep is still queued: squeue -j " + id +
+                               " failed (exit " + std::to_string(rc) + "): " + printable_text(out));
+    if (rc == 0 && out.find_first_not_of(" \n") != std::string::npos)
       throw std::runtime_error("job " + id + " of this sweep is still queued or running (squeue -j " + id +
                                "); wait for it or scancel it, then submit again");
   }
