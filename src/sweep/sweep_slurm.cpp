@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <ostream>
 #include <stdexcept>
 
@@ -82,6 +83,37 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
        "  scontrol requeue \"$task\" || { echo \"=== scontrol requeue $task failed\"; exit 75; }\n"
        "  exit 0\nfi\nexit $rc\n";
   return s;
+}
+
+void add_slurm_tasks(const std::string& dir, nlohmann::json& table) {
+  const fs::path jobs_file = fs::path(dir) / "slurm" / "jobs.json";
+  if (!fs::exists(jobs_file)) return;
+  const nlohmann::json jobs = read_json_file(jobs_file.string(), "slurm jobs file");
+  nlohmann::json& runs = table.at("runs");
+  std::map<std::string, nlohmann::json> task_files;
+  for (const auto& j : jobs) {  // in submission order: the latest submission of a cell wins
+    const std::string tf = j.at("tasks_file").get<std::string>();
+    if (!task_files.count(tf)) {
+      if (!fs::exists(tf)) continue;
+      task_files[tf] = read_json_file(tf, "slurm tasks file").at("tasks");
+    }
+    const nlohmann::json& tasks = task_files[tf];
+    const std::string id = j.at("job_id").get<std::string>();
+    const int off = j.at("offset").get<int>(), n = j.at("tasks").get<int>();
+    for (int i = 0; i < n && size_t(off + i) < tasks.size(); ++i)
+      for (const auto& cell : tasks[size_t(off + i)]) {
+        const size_t k = cell.get<size_t>();
+        if (k >= runs.size()) continue;
+        const std::string task = id + "_" + std::to_string(i);
+        runs[k]["slurm_task"] = task;
+        runs[k]["slurm_log"] = fs::relative(fs::path(tf).parent_path() / ("task-" + task + ".log"), dir).string();
+      }
+  }
+  for (auto& r : runs)
+    if (r.at("state") == "done") {
+      r.erase("slurm_task");
+      r.erase("slurm_log");
+    }
 }
 
 std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset) {

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "src/sweep/sweep_spec.hpp"
 
 namespace atacom {
@@ -40,6 +42,12 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
 // Submits; returns the job ids. Throws std::runtime_error naming the failing command.
 std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::string& dir, const SlurmOptions& o,
                                             std::ostream& log);
+
+// For `atacom sweep status`: every run of `table` (sweep_table) that is not done and
+// was submitted gets "slurm_task" ("<array job>_<index>" of the latest submission
+// holding it) and "slurm_log" (that task's log, relative to the sweep directory).
+// No-op for a sweep never submitted.
+void add_slurm_tasks(const std::string& dir, nlohmann::json& table);
 
 // The cells of task (offset + SLURM_ARRAY_TASK_ID) of a tasks file.
 std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset);

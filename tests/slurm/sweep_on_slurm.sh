@@ -146,6 +146,9 @@ if "$EXE" sweep status "$T/slurm" >"$T/status1.out"; then cat "$T/status1.out"; 
 cat "$T/status1.out"
 for k in 0 1 2; do grep -Eq "^${NAMES[$k]} +done " "$T/status1.out" || fail "${NAMES[$k]} is not done"; done
 grep -Eq "^${NAMES[3]} +partial " "$T/status1.out" || fail "the cancelled run is not reported as partial"
+tasklog=$(sed -n "s/^    slurm task ${J2}_0: //p" "$T/status1.out")
+[ -n "$tasklog" ] && [ -f "$T/slurm/$tasklog" ] || fail "status does not name the cancelled run's Slurm task log"
+grep -q "CANCELLED" "$T/slurm/$tasklog" || fail "$tasklog does not show the cancel"
 
 phase "the same submit command again: only the unfinished run"
 "${SUBMIT[@]}" >"$T/submit2.out" 2>&1 || { cat "$T/submit2.out"; fail "resubmit failed"; }
