@@ -72,10 +72,12 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
        "set -u\n"
        "task=\"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\"\n"
        "echo \"=== task $task (job $SLURM_JOB_ID, restart ${SLURM_RESTART_COUNT:-0}) on $(hostname) at $(date -u +%FT%TZ)\"\n";
+  // The trap is set before the sweep starts: a signal that comes during the start is passed on after it.
+  s += "child=\nrequeue=0\ntrap 'requeue=1; [ -n \"$child\" ] && kill -USR1 $child 2>/dev/null' USR1\n";
   s += quote(o.exe) + " sweep " + quote(dir + "/spec.json") + " --out " + quote(dir) + " --slurm-task " +
        quote(tasks_file) + " --task-offset " + std::to_string(offset) + " &\n";
   // rc 0: every run of the task is done, nothing to requeue (the signal came too late to matter).
-  s += "child=$!\nrequeue=0\ntrap 'requeue=1; kill -USR1 $child 2>/dev/null' USR1\n"
+  s += "child=$!\n[ $requeue = 1 ] && kill -USR1 $child 2>/dev/null\n"
        "wait $child; rc=$?\n"
        "while kill -0 $child 2>/dev/null; do wait $child; rc=$?; done\n"
        "if [ $requeue = 1 ] && [ $rc != 0 ]; then\n"
