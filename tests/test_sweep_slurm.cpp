@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -147,4 +148,25 @@ TEST_CASE("sweep status: a submitted run that is not done names its Slurm task l
   CHECK(table["runs"][3]["slurm_task"] == "13_0");  // the latest submission holding the cell
   CHECK(table["runs"][3]["slurm_log"] == "slurm/submit-b/task-13_0.log");
   fs::remove_all(d);
+}
+
+TEST_CASE("sweep --slurm: --time in every Slurm form, and one too short for the signal is refused", "[sweep]") {
+  CHECK(slurm_time_seconds("90") == 5400);
+  CHECK(slurm_time_seconds("10:30") == 630);
+  CHECK(slurm_time_seconds("1:02:03") == 3723);
+  CHECK(slurm_time_seconds("1-12") == 129600);
+  CHECK(slurm_time_seconds("1-12:00") == 129600);
+  CHECK(slurm_time_seconds("1-12:00:00") == 129600);
+  CHECK(slurm_time_seconds("2-0:0:5") == 172805);
+  CHECK(slurm_time_seconds("UNLIMITED") == -1);
+  for (const char* bad : {"", "1h", "1-", "-1", "1:2:3:4", "1-2-3", "1::2", "12 ", "1-2:3:4:5"}) {
+    INFO(bad);
+    CHECK_THROWS_WITH(slurm_time_seconds(bad), Catch::Contains("is not a Slurm time limit"));
+  }
+  SlurmOptions o;
+  o.time = "2";  // 120 s against the default 120 s signal
+  std::ostringstream log;
+  CHECK_THROWS_WITH(submit_sweep_slurm(SweepSpec{}, "/nonexistent/never-written", o, log),
+                    Catch::Contains("--time 2 (120 s) is too short for --presignal 120"));
+  CHECK(!fs::exists("/nonexistent/never-written"));
 }

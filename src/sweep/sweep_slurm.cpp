@@ -73,7 +73,8 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
        "task=\"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\"\n"
        "echo \"=== task $task (job $SLURM_JOB_ID, restart ${SLURM_RESTART_COUNT:-0}) on $(hostname) at $(date -u +%FT%TZ)\"\n";
   // The trap is set before the sweep starts: a signal that comes during the start is passed on after it.
-  s += "child=\nrequeue=0\ntrap 'requeue=1; [ -n \"$child\" ] && kill -USR1 $child 2>/dev/null' USR1\n";
+  s += "child=\nrequeue=0\n"
+       "trap 'requeue=1; echo \"=== USR1 at $(date -u +%FT%T.%3NZ)\"; [ -n \"$child\" ] && kill -USR1 $child 2>/dev/null' USR1\n";
   s += quote(o.exe) + " sweep " + quote(dir + "/spec.json") + " --out " + quote(dir) + " --slurm-task " +
        quote(tasks_file) + " --task-offset " + std::to_string(offset) + " &\n";
   // rc 0: every run of the task is done, nothing to requeue (the signal came too late to matter).
@@ -81,7 +82,7 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
        "wait $child; rc=$?\n"
        "while kill -0 $child 2>/dev/null; do wait $child; rc=$?; done\n"
        "if [ $requeue = 1 ] && [ $rc != 0 ]; then\n"
-       "  echo \"=== USR1: runs checkpointed (exit $rc); requeueing $task at $(date -u +%FT%TZ)\"\n"
+       "  echo \"=== USR1: runs checkpointed (exit $rc); requeueing $task at $(date -u +%FT%T.%3NZ)\"\n"
        "  scontrol requeue \"$task\" || { echo \"=== scontrol requeue $task failed\"; exit 75; }\n"
        "  exit 0\nfi\nexit $rc\n";
   return s;
@@ -131,8 +132,50 @@ std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset) 
   return t["tasks"][task].get<std::vector<size_t>>();
 }
 
+long slurm_time_seconds(const std::string& t) {
+  if (t == "UNLIMITED" || t == "INFINITE" || t == "unlimited" || t == "infinite") return -1;
+  const auto bad = [&]() {
+    return std::invalid_argument("--time '" + printable_text(t) +
+                                 "' is not a Slurm time limit (minutes, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS)");
+  };
+  std::vector<long> parts;
+  long days = -1;
+  size_t i = 0;
+  while (true) {
+    size_t j = i;
+    while (j < t.size() && t[j] >= '0' && t[j] <= '9') ++j;
+    if (j == i || j - i > 9) throw bad();
+    parts.push_back(std::stol(t.substr(i, j - i)));
+    if (j == t.size()) break;
+    if (t[j] == '-' && days < 0 && parts.size() == 1) {
+      days = parts[0];
+      parts.clear();
+    } else if (t[j] != ':') {
+      throw bad();
+    }
+    i = j + 1;
+  }
+  if (parts.size() > 3) throw bad();
+  long s = 0;
+  if (days >= 0) {  // D-HH[:MM[:SS]]
+    const long mult[3] = {3600, 60, 1};
+    for (size_t k = 0; k < parts.size(); ++k) s += parts[k] * mult[k];
+    return days * 86400 + s;
+  }
+  if (parts.size() == 1) return parts[0] * 60;                                  // minutes
+  if (parts.size() == 2) return parts[0] * 60 + parts[1];                       // MM:SS
+  return parts[0] * 3600 + parts[1] * 60 + parts[2];                            // HH:MM:SS
+}
+
 std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::string& dir_in, const SlurmOptions& o,
                                             std::ostream& log) {
+  if (!o.time.empty()) {
+    const long limit = slurm_time_seconds(o.time);
+    if (limit >= 0 && limit <= o.presignal_s + 60)
+      throw std::invalid_argument("--time " + o.time + " (" + std::to_string(limit) + " s) is too short for --presignal " +
+                                  std::to_string(o.presignal_s) + ": Slurm may send the checkpoint signal up to 60 s early, "
+                                  "so a task would get no work done; give --time more than presignal + 60 s");
+  }
   const std::string dir = fs::absolute(dir_in).lexically_normal().string();
   save_or_check_spec(dir, spec);
   const fs::path slurm = fs::path(dir) / "slurm";

@@ -39,7 +39,12 @@ struct SlurmOptions {
 std::string slurm_array_script(const std::string& dir, const std::string& sub_dir, const std::string& tasks_file,
                                int offset, int tasks, const SlurmOptions& o);
 
-// Submits; returns the job ids. Throws std::runtime_error naming the failing command.
+// Seconds of a Slurm time limit (minutes, MM:SS, HH:MM:SS, D-HH, D-HH:MM, D-HH:MM:SS);
+// -1 for UNLIMITED / INFINITE. Throws std::invalid_argument naming --time otherwise.
+long slurm_time_seconds(const std::string& t);
+
+// Submits; returns the job ids. A --time that leaves no work before the signal
+// (Slurm may send it up to 60 s before --presignal asks) is refused. Throws std::runtime_error naming the failing command.
 std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::string& dir, const SlurmOptions& o,
                                             std::ostream& log);
 

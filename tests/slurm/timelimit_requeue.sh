@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Manual (not in ctest: it takes minutes): the real pre-timeout path. One run longer
-# than the task's time limit (--time 1, --presignal 30): Slurm itself sends USR1
+# than the task's time limit (--time 2, --presignal 30): Slurm itself sends USR1
 # (--signal=B:USR1@30) before the limit, the run checkpoints, the task requeues
 # itself, as often as it takes; the result must equal the same run done locally.
 #   timelimit_requeue.sh ATACOM_EXE [STEPS]
 set -euo pipefail
 export PATH=$PATH:/usr/sbin:/sbin
 EXE=$(realpath "${1:?usage: timelimit_requeue.sh ATACOM_EXE [STEPS]}")
-STEPS=${2:-100000}
+STEPS=${2:-250000}
 HERE=$(cd "$(dirname "$0")" && pwd)
 T=$(mktemp -d /tmp/atacom-slurm-limit.XXXXXX); chmod 755 "$T"
 export SLURM_CONF=$T/cluster/slurm.conf
@@ -20,7 +20,7 @@ cat > "$T/spec.json" <<JSON
 JSON
 bash "$HERE/cluster.sh" up "$T/cluster"
 s0=$(date +%s)
-id=$("$EXE" sweep "$T/spec.json" --out "$T/slurm" --slurm --time 1 --presignal 30 | tail -1)
+id=$("$EXE" sweep "$T/spec.json" --out "$T/slurm" --slurm --time 2 --presignal 30 | tail -1)
 echo "job $id submitted"
 while :; do
   rc=0; out=$(squeue -h -j "$id" -o '%i %t %M' 2>&1) || rc=$?
