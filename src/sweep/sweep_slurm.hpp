@@ -13,7 +13,9 @@
 // task's cores: SLURM_CPUS_PER_TASK, else SLURM_CPUS_ON_NODE) under a bash
 // wrapper: on the pre-timeout signal (--signal=B:USR1@S) it forwards USR1,
 // every run writes a checkpoint and exits, and the task requeues itself
-// (`scontrol requeue $SLURM_JOB_ID`); the requeued task resumes them bitwise.
+// (`scontrol requeue ${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}`: the task, not the
+// array); the requeued task resumes them bitwise. Tested on a real one-node Slurm:
+// tests/slurm/ (ctest label slurm) and docs/sweeps.md.
 #pragma once
 #include <iosfwd>
 #include <string>
