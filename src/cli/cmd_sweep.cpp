@@ -29,7 +29,8 @@ struct SweepArgs {
 
 int run_status(const std::string& dir) {
   const SweepSpec spec = load_sweep_spec(dir);
-  const nlohmann::json table = sweep_table(dir, sweep_cells(spec));
+  nlohmann::json table = sweep_table(dir, sweep_cells(spec));
+  add_slurm_tasks(dir, table);
   std::cout << sweep_status_text(table);
   for (const auto& r : table.at("runs"))
     if (r.at("state") != "done") return 1;

@@ -132,7 +132,7 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     if (run_files_state(dir, cells[k]) != "done") queue.push_back(k);
   size_t next = 0;
   std::vector<Child> running;
-  int failed = 0, done_now = 0;
+  int failed = 0, done_now = 0, stopped = 0;  // stopped: interrupted by a signal to the sweep
   const pid_t me = ::getpid();
   const auto t0 = std::chrono::steady_clock::now();
   auto total_steps = [&]() {
@@ -162,10 +162,12 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     const int64_t s = steps_now();
     const double rate = el > 0 ? double(s - steps_start) / el : 0;
     const size_t left = queue.size() - next;
-    const size_t done = mine.size() - left - running.size() - size_t(failed);
+    const size_t done = mine.size() - left - running.size() - size_t(failed) - size_t(stopped);
     char b[256];
+    const std::string extra = (failed ? ", " + std::to_string(failed) + " failed" : std::string()) +
+                              (stopped ? ", " + std::to_string(stopped) + " stopped" : std::string());
     std::snprintf(b, sizeof(b), "sweep: %zu done, %zu running, %zu left%s  %.0f env-steps/s  ETA %s", done,
-                  running.size(), left, failed ? (", " + std::to_string(failed) + " failed").c_str() : "", rate,
+                  running.size(), left, extra.c_str(), rate,
                   duration(rate > 0 ? double(all_steps - s) / rate : -1).c_str());
     if (opts.log_is_tty) *opts.log << "\r\033[K" << b << std::flush;
     else *opts.log << b << "\n" << std::flush;
@@ -241,6 +243,7 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
         ++done_now;
       } else if (g_stop_signal.load() != 0) {
         rec["state"] = "interrupted";
+        ++stopped;
       } else {
         rec["state"] = "failed";
         rec["exit_code"] = code == 0 ? 1 : code;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <ostream>
 #include <stdexcept>
 
@@ -66,18 +67,56 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
   s += "#SBATCH --signal=B:USR1@" + std::to_string(o.presignal_s) + "\n#SBATCH --requeue\n";
   for (const auto& a : o.sbatch_args) s += "#SBATCH " + a + "\n";
   s += "# Written by atacom sweep --slurm. The sweep runs in the background so that bash runs the\n"
-       "# USR1 trap at once: every run writes a checkpoint and exits, then the task requeues itself.\n"
+       "# USR1 trap at once: every run writes a checkpoint and exits, then the task requeues itself\n"
+       "# (named as ARRAYJOB_TASK: the task, never the whole array).\n"
        "set -u\n"
-       "echo \"=== task ${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID} (job $SLURM_JOB_ID) on $(hostname) at $(date -u +%FT%TZ)\"\n";
+       "task=\"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\"\n"
+       "echo \"=== task $task (job $SLURM_JOB_ID, restart ${SLURM_RESTART_COUNT:-0}) on $(hostname) at $(date -u +%FT%TZ)\"\n";
+  // The trap is set before the sweep starts: a signal that comes during the start is passed on after it.
+  s += "child=\nrequeue=0\n"
+       "trap 'requeue=1; echo \"=== USR1 at $(date -u +%FT%T.%3NZ)\"; [ -n \"$child\" ] && kill -USR1 $child 2>/dev/null' USR1\n";
   s += quote(o.exe) + " sweep " + quote(dir + "/spec.json") + " --out " + quote(dir) + " --slurm-task " +
        quote(tasks_file) + " --task-offset " + std::to_string(offset) + " &\n";
-  s += "child=$!\nrequeue=0\ntrap 'requeue=1; kill -USR1 $child' USR1\n"
+  // rc 0: every run of the task is done, nothing to requeue (the signal came too late to matter).
+  s += "child=$!\n[ $requeue = 1 ] && kill -USR1 $child 2>/dev/null\n"
        "wait $child; rc=$?\n"
        "while kill -0 $child 2>/dev/null; do wait $child; rc=$?; done\n"
-       "if [ $requeue = 1 ]; then\n"
-       "  echo \"=== USR1: runs checkpointed (exit $rc); requeueing $SLURM_JOB_ID\"\n"
-       "  scontrol requeue \"$SLURM_JOB_ID\"\n  exit 0\nfi\nexit $rc\n";
+       "if [ $requeue = 1 ] && [ $rc != 0 ]; then\n"
+       "  echo \"=== USR1: runs checkpointed (exit $rc); requeueing $task at $(date -u +%FT%T.%3NZ)\"\n"
+       "  scontrol requeue \"$task\" || { echo \"=== scontrol requeue $task failed\"; exit 75; }\n"
+       "  exit 0\nfi\nexit $rc\n";
   return s;
+}
+
+void add_slurm_tasks(const std::string& dir, nlohmann::json& table) {
+  const fs::path jobs_file = fs::path(dir) / "slurm" / "jobs.json";
+  if (!fs::exists(jobs_file)) return;
+  const nlohmann::json jobs = read_json_file(jobs_file.string(), "slurm jobs file");
+  nlohmann::json& runs = table.at("runs");
+  std::map<std::string, nlohmann::json> task_files;
+  for (const auto& j : jobs) {  // in submission order: the latest submission of a cell wins
+    const std::string tf = j.at("tasks_file").get<std::string>();
+    if (!task_files.count(tf)) {
+      if (!fs::exists(tf)) continue;
+      task_files[tf] = read_json_file(tf, "slurm tasks file").at("tasks");
+    }
+    const nlohmann::json& tasks = task_files[tf];
+    const std::string id = j.at("job_id").get<std::string>();
+    const int off = j.at("offset").get<int>(), n = j.at("tasks").get<int>();
+    for (int i = 0; i < n && size_t(off + i) < tasks.size(); ++i)
+      for (const auto& cell : tasks[size_t(off + i)]) {
+        const size_t k = cell.get<size_t>();
+        if (k >= runs.size()) continue;
+        const std::string task = id + "_" + std::to_string(i);
+        runs[k]["slurm_task"] = task;
+        runs[k]["slurm_log"] = fs::relative(fs::path(tf).parent_path() / ("task-" + task + ".log"), dir).string();
+      }
+  }
+  for (auto& r : runs)
+    if (r.at("state") == "done") {
+      r.erase("slurm_task");
+      r.erase("slurm_log");
+    }
 }
 
 std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset) {
@@ -93,8 +132,50 @@ std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset) 
   return t["tasks"][task].get<std::vector<size_t>>();
 }
 
+long slurm_time_seconds(const std::string& t) {
+  if (t == "UNLIMITED" || t == "INFINITE" || t == "unlimited" || t == "infinite") return -1;
+  const auto bad = [&]() {
+    return std::invalid_argument("--time '" + printable_text(t) +
+                                 "' is not a Slurm time limit (minutes, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS)");
+  };
+  std::vector<long> parts;
+  long days = -1;
+  size_t i = 0;
+  while (true) {
+    size_t j = i;
+    while (j < t.size() && t[j] >= '0' && t[j] <= '9') ++j;
+    if (j == i || j - i > 9) throw bad();
+    parts.push_back(std::stol(t.substr(i, j - i)));
+    if (j == t.size()) break;
+    if (t[j] == '-' && days < 0 && parts.size() == 1) {
+      days = parts[0];
+      parts.clear();
+    } else if (t[j] != ':') {
+      throw bad();
+    }
+    i = j + 1;
+  }
+  if (parts.size() > 3) throw bad();
+  long s = 0;
+  if (days >= 0) {  // D-HH[:MM[:SS]]
+    const long mult[3] = {3600, 60, 1};
+    for (size_t k = 0; k < parts.size(); ++k) s += parts[k] * mult[k];
+    return days * 86400 + s;
+  }
+  if (parts.size() == 1) return parts[0] * 60;                                  // minutes
+  if (parts.size() == 2) return parts[0] * 60 + parts[1];                       // MM:SS
+  return parts[0] * 3600 + parts[1] * 60 + parts[2];                            // HH:MM:SS
+}
+
 std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::string& dir_in, const SlurmOptions& o,
                                             std::ostream& log) {
+  if (!o.time.empty()) {
+    const long limit = slurm_time_seconds(o.time);
+    if (limit >= 0 && limit <= o.presignal_s + 60)
+      throw std::invalid_argument("--time " + o.time + " (" + std::to_string(limit) + " s) is too short for --presignal " +
+                                  std::to_string(o.presignal_s) + ": Slurm may send the checkpoint signal up to 60 s early, "
+                                  "so a task would get no work done; give --time more than presignal + 60 s");
+  }
   const std::string dir = fs::absolute(dir_in).lexically_normal().string();
   save_or_check_spec(dir, spec);
   const fs::path slurm = fs::path(dir) / "slurm";
@@ -104,7 +185,13 @@ std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::st
   for (const auto& j : jobs) {  // never two submissions of one sweep in the queue at once
     std::string out;
     const std::string id = j.at("job_id").get<std::string>();
-    if (capture("squeue -h -o %i -j " + quote(id), out) == 0 && out.find_first_not_of(" \n") != std::string::npos)
+    // Gone: rc 0 and nothing listed, or "Invalid job id" (past MinJobAge). Any other failure (a
+    // controller that does not answer also prints nothing) must not pass for "gone".
+    const int rc = capture("squeue -h -o %i -j " + quote(id), out);
+    if (rc != 0 && out.find("Invalid job id") == std::string::npos)
+      throw std::runtime_error("cannot tell whether job " + id + " of this sweep is still queued: squeue -j " + id +
+                               " failed (exit " + std::to_string(rc) + "): " + printable_text(out));
+    if (rc == 0 && out.find_first_not_of(" \n") != std::string::npos)
       throw std::runtime_error("job " + id + " of this sweep is still queued or running (squeue -j " + id +
                                "); wait for it or scancel it, then submit again");
   }

@@ -145,6 +145,8 @@ std::string sweep_status_text(const nlohmann::json& table) {
                   steps.c_str(), r.at("attempts").get<int>(),
                   (show_log ? r.at("log") : r.at("dir")).get<std::string>().c_str());
     o << b;
+    if (r.contains("slurm_log"))  // a submitted run that is not done: where its Slurm task logged
+      o << "    slurm task " << r.at("slurm_task").get<std::string>() << ": " << r.at("slurm_log").get<std::string>() << "\n";
   }
   o << "total:";
   for (auto it = table.at("counts").begin(); it != table.at("counts").end(); ++it)
