@@ -7,6 +7,7 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/safe_env.hpp"
+#include "atacom/safety_layer.hpp"
 #include "envs/arm/arm_env.hpp"
 #include "envs/arm/arm_learned_sdf.hpp"
 #include "envs/arm/tiago_kinematics.hpp"
@@ -52,10 +53,13 @@ json sdf_path_accuracy(const SdfPathConfig& c) {
   if (c.envs < 1 || c.steps < c.envs) throw std::invalid_argument("sdf path accuracy: need envs >= 1 and steps >= envs");
   json cfg = sdf_flag_override(c.env, "learned");
   if (c.env == "hri") cfg["hri"] = {{"split", c.split}};
-  auto env = make_env({c.env, c.envs, SafetyLayer::Atacom, cfg});
+  const SafetyLayer layer = parse_safety_layer(c.safety);
+  if (layer != SafetyLayer::Atacom && layer != SafetyLayer::None)
+    throw std::invalid_argument("sdf path accuracy: safety '" + c.safety + "', must be atacom or none");
+  auto env = make_env({c.env, c.envs, layer, cfg});
   auto* safe = dynamic_cast<SafeEnv*>(env.get());
-  const auto* arm = safe ? dynamic_cast<const ArmEnv*>(&safe->inner()) : nullptr;
-  if (!arm) throw std::logic_error("sdf path accuracy: the env is not an ATACOM-wrapped arm env");
+  const auto* arm = dynamic_cast<const ArmEnv*>(safe ? &safe->inner() : env.get());
+  if (!arm) throw std::logic_error("sdf path accuracy: not an arm env");
   const bool hri = arm->hri();
   std::shared_ptr<LearnedObstacle> obs;
   std::shared_ptr<LearnedHuman> hum;
@@ -143,6 +147,7 @@ json sdf_path_accuracy(const SdfPathConfig& c) {
           {"envs", N},
           {"seed", c.seed},
           {"split", hri ? c.split : "-"},
+          {"safety", c.safety},
           {"points", points},
           {"margin", margin},
           {"near", near.to_json()},

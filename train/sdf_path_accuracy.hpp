@@ -18,6 +18,8 @@ struct SdfPathConfig {
   int envs = 64;
   uint64_t seed = 1;
   std::string split = "train";  // hri: the motion split the humans replay (train | test)
+  std::string safety = "atacom";  // atacom (the paths the learned rows allow) | none (raw random actions: paths
+                                  // that also cross the surface)
 };
 
 // {"env", "object", "steps", "points", "margin", "near" / "mid" / "far" /

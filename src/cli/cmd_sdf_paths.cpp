@@ -17,6 +17,7 @@ atacom::cli::RegisterCommand reg(
        app.add_option("--steps", c->steps, "env steps over all envs")->check(CLI::Range(1L, 100000000L));
        app.add_option("--envs", c->envs, "parallel envs")->check(CLI::Range(1, 65536));
        app.add_option("--seed", c->seed, "seed of the envs and the random alpha");
+       app.add_option("--safety", c->safety, "atacom | none (raw random actions)")->check(CLI::IsMember({"atacom", "none"}));
        app.add_option("--split", c->split, "hri: motion split (train | test)")->check(CLI::IsMember({"train", "test"}));
        return [c] {
          std::cout << atacom::sdf_path_accuracy(*c).dump() << std::endl;
