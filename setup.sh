@@ -9,6 +9,8 @@ cd "$(dirname "$0")"
 # optional (only python/examples/sac_torch.py uses it) and not installed here.
 PACKAGES=(build-essential cmake libeigen3-dev libtbb-dev libbox2d-dev nlohmann-json3-dev catch2 libcli11-dev
           pybind11-dev python3-dev python3-numpy python3-pytest)
+# (`./setup.sh --packages` prints the list, for CI's single apt transaction.)
+if [ "${1:-}" = "--packages" ]; then echo "${PACKAGES[*]}"; exit 0; fi
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -21,7 +21,7 @@
 //   native    (-DATACOM_NATIVE=ON on an AVX-512 + FMA CPU, -O2/-O3, as on
 //             the project's build machine).
 // Any other build (a native build on another ISA, the sanitizer build at -O1,
-// which optimises and contracts differently) still checks thread invariance and prints the
+// which optimises and contracts differently, any clang build) still checks thread invariance and prints the
 // hashes it found; it has no constant to compare against and says so.
 #include <catch2/catch.hpp>
 
@@ -34,6 +34,7 @@
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 #include "src/core/binary_io.hpp"
+#include "build_kind.hpp"
 
 using namespace atacom;
 
@@ -41,9 +42,12 @@ namespace {
 
 enum class Build { Portable, NativeAvx512Fma, Unknown };
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if ATACOM_TEST_SANITIZED
 constexpr Build kBuild = Build::Unknown;
 constexpr const char* kBuildName = "sanitizer build (-O1 compiles differently: no constants recorded)";
+#elif !ATACOM_TEST_GCC
+constexpr Build kBuild = Build::Unknown;
+constexpr const char* kBuildName = "clang build (the constants are GCC's: none recorded)";
 #elif defined(__x86_64__) && !defined(__FMA__) && !defined(__AVX__)
 constexpr Build kBuild = Build::Portable;
 constexpr const char* kBuildName = "portable x86-64 (ATACOM_NATIVE=OFF)";

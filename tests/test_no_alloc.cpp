@@ -14,8 +14,9 @@
 #include "atacom/projector.hpp"
 #include "kernels/redsdf_batch.hpp"
 #include "atacom/rng.hpp"
+#include "build_kind.hpp"
 
-#if defined(__SANITIZE_ADDRESS__)
+#if ATACOM_TEST_SANITIZED
 #define ATACOM_COUNT_ALLOCS 0
 #else
 #define ATACOM_COUNT_ALLOCS 1

@@ -341,7 +341,7 @@ void ArmEnv::build_goal_library() {
       if (!in[l] || o.collision[l] || o.joint_violation[l]) continue;
       if (static_rows_ok(o, l)) {
         for (int j = 0; j < kArmJoints; ++j) goal_lib_q_.push_back(ql[j][l]);
-        goal_lib_p_.emplace_back(fk.grasp_p[0][l], fk.grasp_p[1][l], fk.grasp_p[2][l]);
+        goal_lib_p_.emplace_back(double(fk.grasp_p[0][l]), double(fk.grasp_p[1][l]), double(fk.grasp_p[2][l]));
       }
     }
   }

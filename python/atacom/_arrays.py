@@ -31,6 +31,44 @@ def as_float64(x, name, shape=None, ndim=None):
     return np.ascontiguousarray(a)
 
 
+class ControlAffineBatch:
+    """The checked arrays of N control-affine problems qdot = f + G a with
+    rows c (J_q, and J_x with xdot for moving obstacles), shared by every
+    safety layer's front end: shapes (N, n), (N, n, m), (N, k, n), (N, k),
+    alpha (N, m), J_x (N, k, p) and xdot (N, p) (None when p = 0)."""
+
+    def __init__(self, f, G, J_q, c, alpha, J_x=None, xdot=None):
+        f = as_float64(f, "f", ndim=2)
+        N, n = f.shape
+        alpha = as_float64(alpha, "alpha", ndim=2)
+        c = as_float64(c, "c", ndim=2)
+        if N < 1:
+            raise ValueError("the batch is empty (f has N = 0 rows)")
+        if alpha.shape[0] != N or c.shape[0] != N:
+            raise ValueError(f"f, alpha and c must have the same number of rows N (got {N}, {alpha.shape[0]}, "
+                             f"{c.shape[0]})")
+        m, k = alpha.shape[1], c.shape[1]
+        if n < 1:
+            raise ValueError("f must not be empty (it sets n)")
+        if m < 1:
+            raise ValueError("alpha must not be empty (it sets m)")
+        G = as_float64(G, "G", shape=(N, n, m), ndim=3)
+        J_q = as_float64(J_q, "J_q", shape=(N, k, n), ndim=3)
+        if (J_x is None) != (xdot is None):
+            raise ValueError("J_x and xdot must be given together")
+        p = 0
+        if xdot is not None:
+            xdot = as_float64(xdot, "xdot", ndim=2)
+            if xdot.shape[0] != N:
+                raise ValueError(f"xdot must have N = {N} rows, got {xdot.shape[0]}")
+            p = xdot.shape[1]
+            J_x = as_float64(J_x, "J_x", shape=(N, k, p), ndim=3)
+        if p == 0:
+            J_x = xdot = None
+        self.f, self.G, self.J_q, self.c, self.alpha, self.J_x, self.xdot = f, G, J_q, c, alpha, J_x, xdot
+        self.N, self.n, self.m, self.k, self.p = N, n, m, k, p
+
+
 def _shape_hint(shape):
     return f" {tuple(shape)}" if shape is not None else ""
 

@@ -24,7 +24,7 @@ import numbers
 import numpy as np
 
 from . import _core
-from ._arrays import as_count, as_float64
+from ._arrays import ControlAffineBatch, as_count
 
 # Bits of the status array (ProjectorStatus in include/atacom/projector.hpp).
 STATUS_FLAGS = {
@@ -132,33 +132,10 @@ def project(f, G, J_q, c, alpha, J_x=None, xdot=None, slack=None, beta=None, tol
     uint32 bits (STATUS_FLAGS), qdot (N, n) = f + G a. The GIL is released
     while the kernel runs (TBB-parallel unless parallel=False).
     """
-    f = as_float64(f, "f", ndim=2)
-    N, n = f.shape
-    alpha = as_float64(alpha, "alpha", ndim=2)
-    c = as_float64(c, "c", ndim=2)
-    if N < 1:
-        raise ValueError("the batch is empty (f has N = 0 rows)")
-    if alpha.shape[0] != N or c.shape[0] != N:
-        raise ValueError(f"f, alpha and c must have the same number of rows N (got {N}, {alpha.shape[0]}, "
-                         f"{c.shape[0]})")
-    m, k = alpha.shape[1], c.shape[1]
-    if n < 1:
-        raise ValueError("f must not be empty (it sets n)")
-    if m < 1:
-        raise ValueError("alpha must not be empty (it sets m)")
-    G = as_float64(G, "G", shape=(N, n, m), ndim=3)
-    J_q = as_float64(J_q, "J_q", shape=(N, k, n), ndim=3)
-    if (J_x is None) != (xdot is None):
-        raise ValueError("J_x and xdot must be given together")
-    p = 0
-    if xdot is not None:
-        xdot = as_float64(xdot, "xdot", ndim=2)
-        if xdot.shape[0] != N:
-            raise ValueError(f"xdot must have N = {N} rows, got {xdot.shape[0]}")
-        p = xdot.shape[1]
-        J_x = as_float64(J_x, "J_x", shape=(N, k, p), ndim=3)
+    b = ControlAffineBatch(f, G, J_q, c, alpha, J_x, xdot)
+    n, m, k, p = b.n, b.m, b.k, b.p
     model = _model_json(n, m, k, p, slack, beta, tol, K_c, basis, equality)
-    out = _core.project(model, f, G, J_q, c, alpha, J_x if p else None, xdot if p else None, bool(parallel))
+    out = _core.project(model, b.f, b.G, b.J_q, b.c, b.alpha, b.J_x, b.xdot, bool(parallel))
     return ProjectResult(out)
 
 

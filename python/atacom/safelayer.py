@@ -18,7 +18,7 @@ import numbers
 import numpy as np
 
 from . import _core
-from ._arrays import as_float64
+from ._arrays import ControlAffineBatch
 
 STATUS_FLAGS = {1: "infeasible", 2: "alpha_nonfinite", 4: "model_nonfinite", 8: "iteration_limit"}
 
@@ -54,31 +54,8 @@ def safelayer(f, G, J_q, c, alpha, J_x=None, xdot=None, dt=1.0 / 30.0, threshold
     """SafeLayer's correction of N actions (module docstring). f (N, n),
     G (N, n, m), J_q (N, k, n), c (N, k), alpha (N, m); optional J_x (N, k, p)
     and xdot (N, p) together. The GIL is released while the kernel runs."""
-    f = as_float64(f, "f", ndim=2)
-    N, n = f.shape
-    alpha = as_float64(alpha, "alpha", ndim=2)
-    c = as_float64(c, "c", ndim=2)
-    if N < 1:
-        raise ValueError("the batch is empty (f has N = 0 rows)")
-    if alpha.shape[0] != N or c.shape[0] != N:
-        raise ValueError(f"f, alpha and c must have the same number of rows N (got {N}, {alpha.shape[0]}, "
-                         f"{c.shape[0]})")
-    m, k = alpha.shape[1], c.shape[1]
-    if n < 1:
-        raise ValueError("f must not be empty (it sets n)")
-    if m < 1:
-        raise ValueError("alpha must not be empty (it sets m)")
-    G = as_float64(G, "G", shape=(N, n, m), ndim=3)
-    J_q = as_float64(J_q, "J_q", shape=(N, k, n), ndim=3)
-    if (J_x is None) != (xdot is None):
-        raise ValueError("J_x and xdot must be given together")
-    p = 0
-    if xdot is not None:
-        xdot = as_float64(xdot, "xdot", ndim=2)
-        if xdot.shape[0] != N:
-            raise ValueError(f"xdot must have N = {N} rows, got {xdot.shape[0]}")
-        p = xdot.shape[1]
-        J_x = as_float64(J_x, "J_x", shape=(N, k, p), ndim=3)
+    b = ControlAffineBatch(f, G, J_q, c, alpha, J_x, xdot)
+    n, m, k, p = b.n, b.m, b.k, b.p
     dt = _finite(dt, "dt")
     if not dt > 0:
         raise ValueError("'dt' must be > 0")
@@ -88,6 +65,5 @@ def safelayer(f, G, J_q, c, alpha, J_x=None, xdot=None, dt=1.0 / 30.0, threshold
         thr = [_finite(v, f"threshold[{i}]") for i, v in enumerate(threshold)]
         if len(thr) != k:
             raise ValueError(f"'threshold' has {len(thr)} entries, expected one per constraint ({k}) or a single value")
-    out = _core.safelayer(n, m, k, p, dt, thr, f, G, J_q, c, alpha, J_x if p else None, xdot if p else None,
-                          bool(parallel))
+    out = _core.safelayer(n, m, k, p, dt, thr, b.f, b.G, b.J_q, b.c, b.alpha, b.J_x, b.xdot, bool(parallel))
     return SafeLayerResult(out)

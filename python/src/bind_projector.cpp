@@ -6,7 +6,6 @@
 // loops that refill the same N problems (no copy at all).
 // The model comes as the JSON of ProjectorModel (from_json validates it).
 #include <algorithm>
-#include <cstring>
 #include <memory>
 #include <stdexcept>
 
@@ -34,14 +33,6 @@ struct PyProjector {
   PyProjector(const ProjectorModel& mdl, int N) : model(mdl), batch(mdl, N) {}
 };
 
-void copy_in(std::vector<double>& dst, const py::array& src, const std::vector<py::ssize_t>& shape, const char* what) {
-  const double* p = checked_f64(src, shape, what);
-  size_t count = 1;
-  for (py::ssize_t d : shape) count *= static_cast<size_t>(d);
-  if (dst.size() != count) throw std::logic_error(std::string("projector batch size mismatch for ") + what);
-  if (!dst.empty()) std::memcpy(dst.data(), p, dst.size() * sizeof(double));
-}
-
 void run(PyProjector& P, bool parallel) {
   py::gil_scoped_release release;
   project_batch(P.model, P.batch, {.store_basis = false, .store_slack = true, .parallel = parallel});
@@ -61,24 +52,10 @@ void bind_projector(py::module_& m) {
         if (N > (py::ssize_t{1} << 31) - 1) throw std::invalid_argument("N is too large");
         auto P = std::make_unique<PyProjector>(model, static_cast<int>(N));
         ProjectorBatch& B = P->batch;
-        copy_in(B.f, f, {N, n}, "f");
-        copy_in(B.G, G, {N, n, mm}, "G");
-        copy_in(B.Jq, Jq, {N, k, n}, "J_q");
-        copy_in(B.c, c, {N, k}, "c");
-        copy_in(B.alpha, alpha, {N, mm}, "alpha");
-        if (p > 0) {
-          copy_in(B.Jx, Jx.cast<py::array>(), {N, k, p}, "J_x");
-          copy_in(B.xdot, xdot.cast<py::array>(), {N, p}, "xdot");
-        }
+        copy_problems_in(B, N, n, mm, k, p, f, G, Jq, c, alpha, Jx, xdot);
         run(*P, parallel);
-        // qdot = f + G a, as the filter reports it.
         auto qdot = std::make_unique<std::vector<double>>(size_t(N) * n);
-        for (py::ssize_t i = 0; i < N; ++i)
-          for (py::ssize_t r = 0; r < n; ++r) {
-            double v = B.f[size_t(i * n + r)];
-            for (py::ssize_t j = 0; j < mm; ++j) v += B.G[size_t((i * n + r) * mm + j)] * B.a[size_t(i * mm + j)];
-            (*qdot)[size_t(i * n + r)] = v;
-          }
+        qdot_of(B, n, mm, B.a.data(), qdot->data());
         py::capsule owner(P.release(), [](void* ptr) { delete static_cast<PyProjector*>(ptr); });
         py::capsule qowner(qdot.get(), [](void* ptr) { delete static_cast<std::vector<double>*>(ptr); });
         const double* qd = qdot.release()->data();

@@ -2,7 +2,6 @@
 // Inputs copied into a ProjectorBatch (dense G with drift, the filter's
 // form); outputs returned as arrays that own their storage.
 #include <cmath>
-#include <cstring>
 #include <memory>
 #include <stdexcept>
 
@@ -20,14 +19,6 @@ struct PySafeLayer {
   SafeLayerBatch out;
   std::vector<double> qdot;
 };
-
-void copy_in(std::vector<double>& dst, const py::array& src, const std::vector<py::ssize_t>& shape, const char* what) {
-  const double* p = checked_f64(src, shape, what);
-  size_t count = 1;
-  for (py::ssize_t d : shape) count *= static_cast<size_t>(d);
-  if (dst.size() != count) throw std::logic_error(std::string("safelayer batch size mismatch for ") + what);
-  if (!dst.empty()) std::memcpy(dst.data(), p, dst.size() * sizeof(double));
-}
 
 }  // namespace
 
@@ -47,25 +38,12 @@ void bind_safelayer(py::module_& m) {
         P->in.resize(P->pm, static_cast<int>(N));
         P->out.resize(P->sm, static_cast<int>(N));
         ProjectorBatch& B = P->in;
-        copy_in(B.f, f, {N, n}, "f");
-        copy_in(B.G, G, {N, n, mm}, "G");
-        copy_in(B.Jq, Jq, {N, k, n}, "J_q");
-        copy_in(B.c, c, {N, k}, "c");
-        copy_in(B.alpha, alpha, {N, mm}, "alpha");
-        if (p > 0) {
-          copy_in(B.Jx, Jx.cast<py::array>(), {N, k, p}, "J_x");
-          copy_in(B.xdot, xdot.cast<py::array>(), {N, p}, "xdot");
-        }
+        copy_problems_in(B, N, n, mm, k, p, f, G, Jq, c, alpha, Jx, xdot);
         {
           py::gil_scoped_release release;
           safelayer_batch(P->sm, B, P->out, {.store_active_rows = true, .parallel = parallel});
           P->qdot.resize(size_t(N) * n);
-          for (py::ssize_t i = 0; i < N; ++i)
-            for (int r = 0; r < n; ++r) {
-              double v = B.f[size_t(i * n + r)];
-              for (int j = 0; j < mm; ++j) v += B.G[size_t((i * n + r) * mm + j)] * P->out.a[size_t(i * mm + j)];
-              P->qdot[size_t(i * n + r)] = v;
-            }
+          qdot_of(B, n, mm, P->out.a.data(), P->qdot.data());
         }
         py::capsule owner(P.release(), [](void* ptr) { delete static_cast<PySafeLayer*>(ptr); });
         const PySafeLayer& R = *static_cast<PySafeLayer*>(owner.get_pointer());

@@ -12,6 +12,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+namespace atacom {
+struct ProjectorBatch;
+}
+
 namespace atacom::py_bindings {
 
 namespace py = pybind11;
@@ -44,5 +48,14 @@ py::array view_of(const py::handle& owner, std::vector<py::ssize_t> shape, const
 const double* checked_f64(const py::array& a, const std::vector<py::ssize_t>& shape, const char* what);
 double* checked_f64_mutable(py::array& a, const std::vector<py::ssize_t>& shape, const char* what);
 std::string shape_str(const std::vector<py::ssize_t>& shape);
+
+// The arrays of N control-affine problems in the filter's form (dense G with
+// drift; J_x and xdot only when p > 0) copied into B, sized for them, after
+// checking every shape. Shared by project() and safelayer().
+void copy_problems_in(ProjectorBatch& B, py::ssize_t N, py::ssize_t n, py::ssize_t m, py::ssize_t k, py::ssize_t p,
+                      const py::array& f, const py::array& G, const py::array& Jq, const py::array& c,
+                      const py::array& alpha, const py::object& Jx, const py::object& xdot);
+// qdot = f + G a of B's N problems (a: N x m), as the filter reports it.
+void qdot_of(const ProjectorBatch& B, py::ssize_t n, py::ssize_t m, const double* a, double* qdot);
 
 }  // namespace atacom::py_bindings

@@ -1,23 +1,18 @@
 #include "src/safety/filter_safelayer.hpp"
 
-#include <cmath>
 #include <stdexcept>
 #include <vector>
 
 #include "atacom/safelayer.hpp"
+#include "src/safety/filter_json.hpp"
 
 namespace atacom {
 
 namespace {
 
 using nlohmann::json;
-
-double finite_number(const json& v, const std::string& what) {
-  if (!v.is_number()) throw std::invalid_argument("'" + what + "' must be a number");
-  const double x = v.get<double>();
-  if (!std::isfinite(x)) throw std::invalid_argument("'" + what + "' is NaN or infinite");
-  return x;
-}
+using filter_json::number;
+using filter_json::per_row;
 
 json status_flags(uint32_t st) {
   json f = json::array();
@@ -54,21 +49,10 @@ json safelayer_filter(const json& j, const ProjectorModel& model, const Projecto
   const int n = model.n, m = model.m, k = model.k;
   double dt = 1.0 / 30.0;
   if (j.contains("dt")) {
-    dt = finite_number(j.at("dt"), "dt");
+    dt = number(j.at("dt"), "dt");
     if (!(dt > 0)) throw std::invalid_argument("'dt' must be > 0");
   }
-  std::vector<double> threshold(k, 0.0);
-  if (j.contains("threshold")) {
-    const json& t = j.at("threshold");
-    if (t.is_array()) {
-      if (static_cast<int>(t.size()) != k)
-        throw std::invalid_argument("'threshold' has " + std::to_string(t.size()) +
-                                    " entries, expected one per constraint (" + std::to_string(k) + ") or a single value");
-      for (int i = 0; i < k; ++i) threshold[i] = finite_number(t[i], "threshold[" + std::to_string(i) + "]");
-    } else {
-      threshold.assign(k, finite_number(t, "threshold"));
-    }
-  }
+  const std::vector<double> threshold = per_row<double>(j, "threshold", k, 0.0, number);
   const SafeLayerModel sm = safelayer_model(model, dt, threshold);
   SafeLayerBatch out(sm, 1);
   safelayer_batch(sm, B, out, {.store_active_rows = true, .parallel = false});
