@@ -11,6 +11,7 @@ void learned_human_distance_lanes(const LearnedHuman& o, const double* pose, con
                                   lanes::vd* ddt) {
   constexpr int L = lanes::kLanes, P = kHumanDofs;
   if (npoi > kLearnedHumanMaxPoi || cnt < 1) throw std::logic_error("learned_human_distance_lanes: bad sizes");
+  if (!pose || !rate) throw std::logic_error("learned_human_distance_lanes: no human poses (HumanCapsLanes::pose unset)");
   alignas(64) float p[kLearnedHumanMaxPoi * L * 3], q[kLearnedHumanMaxPoi * L * P];
   alignas(64) float dd[kLearnedHumanMaxPoi * L], gg[kLearnedHumanMaxPoi * L * 3], gq[kLearnedHumanMaxPoi * L * P];
   double cs[L], sn[L];

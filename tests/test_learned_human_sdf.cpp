@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/safe_env.hpp"
@@ -219,6 +220,25 @@ TEST_CASE("hri with the shipped learned human: rows agree with the analytic rows
   ArmEnvConfig table = default_arm_env_config(ArmTask::Table);
   table.sdf = {{"human", "learned"}};
   CHECK_THROWS_WITH(ArmEnv(table, 1), Catch::Contains("env.sdf.human"));
+}
+
+TEST_CASE("hri with the learned human: identical for 1 and 2 threads", "[redsdf][hri]") {
+  std::vector<double> c[2];
+  for (int threads : {1, 2}) {
+    set_num_threads(threads);
+    auto env = make_env({"hri", 24, SafetyLayer::Atacom, sdf_flag_override("hri", "learned")});
+    env->seed(8);
+    env->reset();
+    Rng rng(2, 0);
+    std::vector<double> a(size_t(24) * kArmJoints);
+    for (int t = 0; t < 30; ++t) {
+      for (double& x : a) x = rng.uniform(-1.0, 1.0);
+      env->step(a.data());
+    }
+    c[threads - 1] = env->buffers().constraints;
+  }
+  set_num_threads(0);
+  CHECK(c[0] == c[1]);
 }
 
 // The learned rows keep the analytic ones: with thresholds delta + margin

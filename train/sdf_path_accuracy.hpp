@@ -1,7 +1,8 @@
 // Accuracy of a learned distance field along the arm's points of interest
 // during rollouts (issue 11, part 3: "on the exact geometry near the PoIs'
-// actual paths"): random-alpha ATACOM rollouts of an arm env with its learned
-// field; after every step, each PoI of every env that did not just end is
+// actual paths"): random-alpha rollouts of an arm env with its learned field,
+// through ATACOM or raw (safety "none": paths that also reach the surface);
+// after every step, each PoI of every env that did not just end is
 // evaluated with the learned field and with the analytic one (the env's
 // smooth-union rows) and the exact distance. Figures: docs/sdf.md.
 #pragma once
