@@ -5,9 +5,10 @@
 // 2 threads. Learned lines carry FLOPs per point and their share of the
 // measured float GEMM rate at the network's layer shape (gemm_peak lines).
 //
-// Weights: the shipped data/sdf/shelf model when present; the human networks
-// have random weights (no human model is shipped yet): dense layers cost the
-// same whatever the values, so the rate is that of a trained network.
+// Weights: the shipped data/sdf/shelf and data/sdf/human models when present
+// (the human's takes the 34 joint angles, in its body frame); the other human
+// networks (pose 38) have random weights: dense layers cost the same whatever
+// the values, so their rate is that of a trained network of that size.
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -165,11 +166,18 @@ int main(int argc, char** argv) {
     return m;
   };
   const RedsdfModel human_small = human_net({128, 128, 128, 128, 128});
+  const std::string shipped_human = data_dir() + "/sdf/human";
+  const bool have_human = std::filesystem::exists(shipped_human + "/redsdf.bin");
+  const RedsdfModel human_shipped = have_human ? load_redsdf(shipped_human, "human") : RedsdfModel();
+  std::vector<float> joints(size_t(n) * kHumanDofs);
+  for (int64_t i = 0; i < n; ++i)
+    for (int k = 0; k < kHumanDofs; ++k) joints[size_t(i * kHumanDofs + k)] = float(hb.pose[size_t(kHumanRootDofs + k)]);
   const RedsdfModel human_ref = human_net({512, 512, 512, 512, 512});
   for (int threads : {1, 2}) {
     bench_analytic("shelf", shelf.shapes, ps, N, poi, threads);
     bench_learned("shelf", shelf_weights, shelf_model, ps, pose, N, poi, threads);
     bench_analytic("human", caps, ph, N, poi, threads);
+    if (have_human) bench_learned("human", "shipped " + shipped_human, human_shipped, ph, joints, N, poi, threads);
     bench_learned("human", "random (throughput only)", human_small, ph, pose, N, poi, threads);
     bench_learned("human", "random (throughput only), the reference's 5 x 512", human_ref, ph, pose, N, poi, threads);
   }

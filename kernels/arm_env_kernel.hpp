@@ -10,6 +10,7 @@
 #include "kernels/arm_fk_lanes.hpp"
 #include "kernels/human_rows_lanes.hpp"
 #include "kernels/lanes.hpp"
+#include "kernels/redsdf_human_lanes.hpp"
 #include "kernels/redsdf_lanes.hpp"
 #include "kernels/sdf_impl.hpp"
 
@@ -40,6 +41,7 @@ struct ArmKernelConst {
   bool hri = false;
   HumanRowsConst human{};                // thresholds of the human rows
   const HumanFkConst* human_fk = nullptr;
+  const LearnedHuman* learned_human = nullptr;  // set: the human rows use this field (poses in HumanCapsLanes)
   double cup_axis[3] = {0, 0, 1};        // in the grasping frame
   double cos_upright = 0.0;              // cos(theta_max - margin)
   explicit ArmKernelConst(const TiagoArmModel& m) : fk(m) {}
@@ -121,7 +123,11 @@ static inline void arm_upright_row_lanes(const ArmKernelConst& k, const ArmFkLan
 static inline void arm_hri_rows_lanes(const ArmKernelConst& k, const ArmFkLanes& fk, const HumanCapsLanes& h,
                                       ArmKernelOut& o, bool with_grad) {
   vd Jh[kArmPoi][kArmJoints];
-  human_rows_lanes<kArmJoints>(k.human, *k.human_fk, fk.poi, fk.Jp, h, &o.c[kRowHuman], Jh, o.dcdt, o.d_human);
+  if (k.learned_human)  // o.d_human is not formed (nothing reads it; the contact check is exact)
+    learned_human_rows_lanes<kArmJoints>(*k.learned_human, k.human, h.pose, h.pose_rate, h.count, fk.poi, fk.Jp,
+                                         &o.c[kRowHuman], Jh, o.dcdt);
+  else
+    human_rows_lanes<kArmJoints>(k.human, *k.human_fk, fk.poi, fk.Jp, h, &o.c[kRowHuman], Jh, o.dcdt, o.d_human);
   if (with_grad)
     for (int i = 0; i < kArmPoi; ++i)
       for (int j = 0; j < kArmJoints; ++j) o.J[kRowHuman - kRowScene + i][j] = Jh[i][j];

@@ -15,6 +15,11 @@ namespace atacom::lanes {
 struct HumanCapsLanes {
   vd a[kHumanCapsules][3], b[kHumanCapsules][3];    // end points, robot base frame
   vd va[kHumanCapsules][3], vb[kHumanCapsules][3];  // their velocities (when requested)
+  // For a learned human field (kernels/redsdf_human_lanes.hpp): the poses and
+  // rates (count x 38) of the lanes' envs; lanes past count repeat the last.
+  const double* pose = nullptr;
+  const double* pose_rate = nullptr;
+  int count = 0;
 };
 
 struct HumanFrameLanes {

@@ -85,7 +85,7 @@ double RedsdfBatch::flops_per_point() const {
 }
 
 void RedsdfBatch::run_block(Slot& s, const float* p, const float* pose, bool pose_shared, int64_t lo, int rows,
-                            float* d, float* grad) const {
+                            float* d, float* grad, float* grad_pose) const {
   const RedsdfModel& M = *m_;
   const RedsdfLayout& L = M.layout;
   const float* P = M.params.data();
@@ -134,6 +134,7 @@ void RedsdfBatch::run_block(Slot& s, const float* p, const float* pose, bool pos
   }
   if (!grad) return;
   // Backward for the input gradient, ping-ponging between ga and gb.
+  const int first_cols = grad_pose ? in : 3;
   float* ga = s.ga.data();
   float* gbuf = s.gb.data();
   auto other = [&](const float* cur) { return cur == ga ? gbuf : ga; };
@@ -147,20 +148,24 @@ void RedsdfBatch::run_block(Slot& s, const float* p, const float* pose, bool pos
   layer_backward(P, L.side[0], act(nt + nh), s.gs.data(), rows, cur, L.side[0].in, true);
   for (size_t k = nt; k-- > 0;) {
     float* out = other(cur);
-    layer_backward(P, L.trunk[k], act(k), cur, rows, out, k == 0 ? 3 : L.trunk[k].in, false);
+    layer_backward(P, L.trunk[k], act(k), cur, rows, out, k == 0 ? first_cols : L.trunk[k].in, false);
     cur = out;
   }
   for (int r = 0; r < rows; ++r) {
     float* g = grad + (lo + r) * 3;
-    g[0] += cur[3 * r], g[1] += cur[3 * r + 1], g[2] += cur[3 * r + 2];
+    const float* c = cur + int64_t(first_cols) * r;
+    g[0] += c[0], g[1] += c[1], g[2] += c[2];
+    if (grad_pose)
+      for (int k = 0; k < pd; ++k) grad_pose[(lo + r) * pd + k] = c[3 + k];
   }
 }
 
 void RedsdfBatch::evaluate_range(const float* p, const float* pose, bool pose_shared, int64_t lo, int64_t hi,
-                                 float* d, float* grad) {
+                                 float* d, float* grad, float* grad_pose) {
+  if (grad_pose && !grad) throw std::invalid_argument("RedsdfBatch::evaluate_range: grad_pose needs grad");
   auto run = [&](Slot& s) {
     for (int64_t b = lo; b < hi; b += kRedsdfBlock)
-      run_block(s, p, pose, pose_shared, b, int(std::min<int64_t>(kRedsdfBlock, hi - b)), d, grad);
+      run_block(s, p, pose, pose_shared, b, int(std::min<int64_t>(kRedsdfBlock, hi - b)), d, grad, grad_pose);
   };
   const int idx = tbb::this_task_arena::current_thread_index();
   if (idx >= 0 && size_t(idx) + 1 < slots_.size()) {

@@ -32,8 +32,10 @@ class RedsdfBatch {
 
   // The same on the calling thread only, for the rows [lo, hi) (a caller
   // that already runs its own parallel loop).
+  // grad_pose (optional, needs grad): (n x P) = grad_pose d, from the same
+  // backward pass (the first layer's backward then forms all its columns).
   void evaluate_range(const float* p, const float* pose, bool pose_shared, int64_t lo, int64_t hi, float* d,
-                      float* grad);
+                      float* grad, float* grad_pose = nullptr);
 
   const RedsdfModel& model() const { return *m_; }
   // FLOPs per point with gradient (2 per multiply-add, forward + input backward).
@@ -49,7 +51,7 @@ class RedsdfBatch {
     AlignedVector<float> seed_b;  // (block x 2) dd/d(b0, b1)
   };
   void run_block(Slot& s, const float* p, const float* pose, bool pose_shared, int64_t lo, int rows, float* d,
-                 float* grad) const;
+                 float* grad, float* grad_pose) const;
 
   const RedsdfModel* m_;
   std::vector<size_t> act_off_;  // offsets of each layer's output in Slot::acts (trunk, head, side)

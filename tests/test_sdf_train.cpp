@@ -33,7 +33,8 @@ TEST_CASE("sdf data: labels are the scene's smooth union (never above the exact 
     const Eigen::Vector3d p(e.p[size_t(3 * i)], e.p[size_t(3 * i + 1)], e.p[size_t(3 * i + 2)]);
     CHECK(std::abs(e.y[size_t(i)] - union_distance_exact(table, p)) < 1e-6);
   }
-  CHECK_THROWS_WITH(sdf_object_geometry("human"), Catch::Contains("not implemented yet"));
+  CHECK_THROWS_WITH(sdf_object_geometry("human"), Catch::Contains("static-object geometry exists for table and shelf only"));
+  CHECK_THROWS_WITH(sdf_object_geometry("tiago"), Catch::Contains("--object tiago: the robot-body field is not implemented"));
 }
 
 TEST_CASE("sdf training: short run lowers the error, writes its files, same weights for 1 and 2 threads", "[redsdf]") {

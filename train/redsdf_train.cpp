@@ -10,26 +10,61 @@
 
 #include "atacom/rng.hpp"
 #include "envs/arm/arm_scene.hpp"
+#include "envs/arm/human_model.hpp"
+#include "envs/arm/human_motion.hpp"
 #include "kernels/redsdf_batch.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/core/svg.hpp"
 #include "train/adam.hpp"
 #include "train/autodiff.hpp"
+#include "train/sdf_human_data.hpp"
 
 namespace atacom {
 
 using json = nlohmann::json;
 
+namespace {
+// The human's centre: the middle of its capsules' bounds in the neutral pose (body frame).
+Eigen::Vector3d human_centre(const HumanModel& model) {
+  const float q[kHumanDofs] = {};
+  double cap[kHumanCapsules * 6];
+  human_body_capsules(model, q, cap);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (int c = 0; c < kHumanCapsules; ++c)
+    for (int e = 0; e < 2; ++e) {
+      const Eigen::Vector3d x(cap + c * 6 + 3 * e);
+      const Eigen::Vector3d r = Eigen::Vector3d::Constant(model.fk.cap_radius[c]);
+      lo = lo.cwiseMin(x - r);
+      hi = hi.cwiseMax(x + r);
+    }
+  return 0.5 * (lo + hi);
+}
+}  // namespace
+
 SdfTrainConfig default_sdf_train_config(const std::string& object) {
   SdfTrainConfig c;
-  sdf_object_geometry(object, &c.arch.centre);  // validates the name
   c.object = object;
-  c.arch.pose_dim = 0;
   c.arch.hidden = {64, 64, 64, 64};
   c.arch.trunk_layers = 2;
   c.arch.side_width = 32;
   c.data = default_sdf_data_config();
+  if (object == "human") {
+    // Pose-conditioned: 34 joint angles, body frame (train/sdf_human_data.hpp).
+    c.arch.pose_dim = kHumanDofs;
+    c.arch.hidden = {128, 128, 128, 128};
+    c.arch.centre = human_centre(load_human_model());
+    // The reference's human list runs from -0.1 to 0.5; the capsules are 4-8 cm
+    // thick, so the inner offsets stop at -3 cm (deeper ones cross the axis).
+    c.data.epsilons = {-0.03, -0.01, -0.005, 0.0, 0.005, 0.01, 0.02, 0.03, 0.05, 0.08, 0.12, 0.16, 0.2, 0.3, 0.4, 0.5};
+    c.data.poses = 3000;
+    c.data.surface_points = 20;
+    c.data.volume_margin = 0.6;
+    c.max_epochs = 60;
+    return c;
+  }
+  sdf_object_geometry(object, &c.arch.centre);  // validates the name
+  c.arch.pose_dim = 0;
   return c;
 }
 
@@ -57,10 +92,10 @@ void from_json(const json& j, SdfTrainConfig& c) {
 }
 
 ShapeUnion sdf_object_geometry(const std::string& object, Eigen::Vector3d* centre) {
+  if (object == "tiago")
+    throw std::invalid_argument("--object tiago: the robot-body field is not implemented (table, shelf and human are)");
   if (object != "table" && object != "shelf")
-    throw std::invalid_argument("--object " + object +
-                                ": learned static-object fields exist for table and shelf (human and tiago are not "
-                                "implemented yet)");
+    throw std::invalid_argument("--object " + object + ": static-object geometry exists for table and shelf only");
   ArmSceneConfig sc = default_arm_scene_config(parse_arm_task(object));
   sc.position.setZero();
   sc.yaw_deg = 0;
@@ -115,9 +150,14 @@ json sdf_accuracy(const RedsdfModel& m, const SdfSamples& s, const std::vector<i
   RedsdfBatch batch(m);
   const int64_t n = int64_t(idx.size());
   std::vector<float> p(static_cast<size_t>(3 * n)), d(static_cast<size_t>(n)), g(static_cast<size_t>(3 * n));
-  for (int64_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) p[size_t(3 * i + k)] = s.p[size_t(3 * idx[size_t(i)] + k)];
-  batch.evaluate(p.data(), nullptr, false, n, d.data(), g.data());
+  const int P = s.pose_dim;
+  std::vector<float> pose(size_t(n) * size_t(P));
+  for (int64_t i = 0; i < n; ++i) {
+    const int j = idx[size_t(i)];
+    for (int k = 0; k < 3; ++k) p[size_t(3 * i + k)] = s.p[size_t(3 * j + k)];
+    for (int k = 0; k < P; ++k) pose[size_t(i * P + k)] = s.poses[size_t(s.pose_id[size_t(j)]) * P + size_t(k)];
+  }
+  batch.evaluate(p.data(), P ? pose.data() : nullptr, false, n, d.data(), g.data());
   struct Acc { double sum = 0, max = 0; int64_t cnt = 0; std::vector<double> ang; };
   Acc near, far, all;
   const std::vector<double> margins{0.0, 0.005, 0.01, 0.02, 0.03, 0.05, 0.1};
@@ -177,8 +217,19 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
   write_file_atomic(dir + "/config.json", json(cfg).dump(2) + "\n");
 
   Eigen::Vector3d centre;
-  const ShapeUnion geo = sdf_object_geometry(cfg.object, &centre);
-  const SdfSamples s = make_static_sdf_samples(geo, cfg.data);
+  SdfSamples s;
+  if (cfg.object == "human") {
+    const HumanModel hm = load_human_model();
+    centre = human_centre(hm);
+    s = make_human_sdf_samples(hm, load_default_human_motion(), cfg.data);
+  } else {
+    s = make_static_sdf_samples(sdf_object_geometry(cfg.object, &centre), cfg.data);
+  }
+  if (s.pose_dim != cfg.arch.pose_dim)
+    throw std::invalid_argument("sdf-train: config key 'arch.pose_dim' is " + std::to_string(cfg.arch.pose_dim) +
+                                ", object " + cfg.object + " has " + std::to_string(s.pose_dim) + " pose inputs");
+  const int P = s.pose_dim, IN = 3 + P;
+  auto pose_of = [&](int j) { return &s.poses[size_t(s.pose_id[size_t(j)]) * size_t(P)]; };
   const double t_data = secs();
   // Split 0.8 / 0.1 / 0.1 after a seeded shuffle.
   std::vector<int> perm(size_t(s.n));
@@ -200,14 +251,16 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
   Adam<float> adam(m.params.size(), default_adam_config());
   Tape<float> tape;
   const int B = cfg.batch;
-  AlignedVector<float> bx(static_cast<size_t>(B) * 3), bn(static_cast<size_t>(B)), by(bn), bw(bn);
+  AlignedVector<float> bx(static_cast<size_t>(B) * IN), bn(static_cast<size_t>(B)), by(bn), bw(bn);
   RedsdfBatch batch(m);
-  std::vector<float> vp(static_cast<size_t>(3 * n_va)), vd(static_cast<size_t>(n_va));
-  for (int i = 0; i < n_va; ++i)
+  std::vector<float> vp(static_cast<size_t>(3 * n_va)), vd(static_cast<size_t>(n_va)), vpose(size_t(n_va) * size_t(P));
+  for (int i = 0; i < n_va; ++i) {
     for (int k = 0; k < 3; ++k) vp[size_t(3 * i + k)] = s.p[size_t(3 * va[size_t(i)] + k)];
+    for (int k = 0; k < P; ++k) vpose[size_t(i * P + k)] = pose_of(va[size_t(i)])[k];
+  }
   auto weight = [&](float y) { return std::abs(y) < 0.1f ? float(cfg.near_weight) : 1.0f; };
   auto val_wmse = [&] {
-    batch.evaluate(vp.data(), nullptr, false, n_va, vd.data(), nullptr);
+    batch.evaluate(vp.data(), P ? vpose.data() : nullptr, false, n_va, vd.data(), nullptr);
     double acc = 0, ws = 0;
     for (int i = 0; i < n_va; ++i) {
       const float y = s.y[size_t(va[size_t(i)])];
@@ -234,10 +287,11 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
         const float* pj = &s.p[size_t(3 * j)];
         float nn = 0;
         for (int k = 0; k < 3; ++k) {
-          bx[size_t(3 * r + k)] = pj[k];
+          bx[size_t(IN * r + k)] = pj[k];
           const float dk = pj[k] - float(centre(k));
           nn += dk * dk;
         }
+        for (int k = 0; k < P; ++k) bx[size_t(IN * r + 3 + k)] = pose_of(j)[k];
         bn[size_t(r)] = std::sqrt(nn);
         by[size_t(r)] = s.y[size_t(j)];
         bw[size_t(r)] = weight(s.y[size_t(j)]);
@@ -291,7 +345,10 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
                 {"stop", stop},
                 {"best_val_wmse", best_val},
                 {"seconds", {{"data", t_data}, {"total", secs()}}},
-                {"frame", "object frame: the arm scene's object at position 0, yaw 0 (base_footprint axes)"}};
+                {"frame", cfg.object == "human"
+                              ? "body frame: p_body = Rz(yaw)^T (p - (x, y, z)) of the human's root; pose input = the 34 "
+                                "joint angles (pose entries 4..37)"
+                              : "object frame: the arm scene's object at position 0, yaw 0 (base_footprint axes)"}};
   m.manifest["metrics"] = {{"test", sdf_accuracy(m, s, te)}};
   // The margin a learned row adds to its threshold: the largest over-estimate
   // near the surface on the test split, plus 5 mm, rounded up to a millimetre.

@@ -19,7 +19,7 @@ SdfDataConfig default_sdf_data_config() {
 
 void to_json(nlohmann::json& j, const SdfDataConfig& c) {
   j = {{"surface_points", c.surface_points}, {"epsilons", c.epsilons}, {"volume_fraction", c.volume_fraction},
-       {"volume_margin", c.volume_margin},   {"blend", c.blend},  {"seed", c.seed}};
+       {"volume_margin", c.volume_margin},   {"poses", c.poses}, {"blend", c.blend},  {"seed", c.seed}};
 }
 
 void from_json(const nlohmann::json& j, SdfDataConfig& c) {
@@ -28,6 +28,7 @@ void from_json(const nlohmann::json& j, SdfDataConfig& c) {
   r.get("epsilons", c.epsilons);
   r.get("volume_fraction", c.volume_fraction, range::closed(0.0, 10.0));
   r.get("volume_margin", c.volume_margin, range::closed(0.0, 10.0));
+  r.get("poses", c.poses, range::closed(1, 1 << 20));
   r.get("blend", c.blend, range::closed(-1.0, 0.5));
   r.get("seed", c.seed);
   r.finish();

@@ -25,6 +25,7 @@ struct SdfDataConfig {
   std::vector<double> epsilons;                // signed offsets along the normal, m
   double volume_fraction = 0.2;                // extra uniform samples, as a fraction of the surface ones
   double volume_margin = 0.8;                  // the uniform box: object bounds grown by this, m
+  int poses = 1;                               // human only: poses from the motion library's training split
   double blend = -1.0;                         // labels' smooth-union k, m: -1 = the object's own
                                                // (the env's rows), 0 = the exact min
   uint64_t seed = 1;
@@ -36,6 +37,9 @@ void from_json(const nlohmann::json& j, SdfDataConfig& c);  // unknown keys reje
 
 struct SdfSamples {
   int n = 0;
+  int pose_dim = 0;           // P (0: a static object)
+  std::vector<float> poses;   // (num poses x P) the network's pose inputs
+  std::vector<int> pose_id;   // (n) each point's row of `poses` (empty when P == 0)
   std::vector<float> p;     // (n x 3) points, object frame
   std::vector<float> y;     // (n) exact signed distance
   std::vector<float> grad;  // (n x 3) exact gradient (nearest primitive's, unit)

@@ -48,6 +48,9 @@ void splat_caps(const HumanBatch& B, int e, lanes::HumanCapsLanes& h) {
       h.va[c][r] = lanes::splat(vel[c * 6 + r]);
       h.vb[c][r] = lanes::splat(vel[c * 6 + 3 + r]);
     }
+  h.pose = &B.pose[static_cast<size_t>(e) * kHumanPoseDim];
+  h.pose_rate = &B.pose_rate[static_cast<size_t>(e) * kHumanPoseDim];
+  h.count = 1;
 }
 }  // namespace
 
@@ -132,8 +135,11 @@ ArmEnv::ArmEnv(const ArmEnvConfig& config, int num_envs) : config_(config) {
     const ArmHriConfig& h = config_.hri;
     config_.hri.cup_axis.normalize();
     std::vector<double> delta(kArmPoi);
+    kern->learned_human = load_arm_learned_human(config_.sdf);
+    k.learned_human = kern->learned_human.get();
+    const double learned_margin = kern->learned_human ? kern->learned_human->margin : 0.0;
     for (int i = 0; i < kArmPoi; ++i) {
-      delta[size_t(i)] = model_.scene_cover[i] + h.human.margin[size_t(i)];
+      delta[size_t(i)] = model_.scene_cover[i] + h.human.margin[size_t(i)] + learned_margin;
       row_offset_hri_[size_t(i)] = delta[size_t(i)];
     }
     human_rows_ = make_human_rows(delta, kArmJoints, h.human_blend);
@@ -413,6 +419,7 @@ void ArmEnv::eval_group(int e0, int cnt, const double* actions) {
     human_at(e0, cnt);
     constexpr int stride = kHumanCapsules * 6;
     lanes::human_load_caps_lanes(&humans_.cap[size_t(e0) * stride], &humans_.cap_vel[size_t(e0) * stride], cnt, h);
+    h.pose = &humans_.pose[size_t(e0) * kHumanPoseDim], h.pose_rate = &humans_.pose_rate[size_t(e0) * kHumanPoseDim], h.count = cnt;
     if (prof) human_pre_ns = now_ns() - th;
   }
   // 2. Kinematics, constraints and ground truth of the reached state.

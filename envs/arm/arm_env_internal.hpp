@@ -33,6 +33,7 @@ namespace atacom {
 struct ArmEnv::Kernel {
   lanes::ArmKernelConst k;
   std::shared_ptr<LearnedObstacle> learned;  // the obstacle's learned field, or null (analytic)
+  std::shared_ptr<LearnedHuman> learned_human;  // HRI: the human's learned field, or null (analytic)
   explicit Kernel(const TiagoArmModel& m) : k(m) {}
 };
 }  // namespace atacom

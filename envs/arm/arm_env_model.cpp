@@ -289,6 +289,7 @@ void ArmEnv::refresh(int e) {
     lanes::HumanCapsLanes h;
     constexpr int stride = kHumanCapsules * 6;
     lanes::human_load_caps_lanes(&humans_.cap[size_t(e) * stride], &humans_.cap_vel[size_t(e) * stride], 1, h);
+    h.pose = &humans_.pose[size_t(e) * kHumanPoseDim], h.pose_rate = &humans_.pose_rate[size_t(e) * kHumanPoseDim], h.count = 1;
     lanes::arm_hri_rows_lanes(k, fk, h, o, true);
   }
   const size_t se = static_cast<size_t>(e);

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "envs/arm/arm_scene.hpp"
+#include "kernels/redsdf_human_lanes.hpp"
 #include "kernels/redsdf_lanes.hpp"
 
 namespace atacom {
@@ -24,9 +25,13 @@ namespace atacom {
 std::shared_ptr<LearnedObstacle> load_arm_learned_obstacle(const std::map<std::string, std::string>& sdf,
                                                            const ArmSceneConfig& scene);
 
+// HRI: the human's field per `sdf` (key "human"; null when absent or
+// analytic). Same errors as above; the model must take the 34 joint angles.
+std::shared_ptr<LearnedHuman> load_arm_learned_human(const std::map<std::string, std::string>& sdf);
+
 // Env config override for `--sdf mode` on env `env`: {"sdf": {object: mode}}
-// for table and shelf; "analytic" on any other env is an empty override,
-// "learned" there is an error (no shipped model).
+// for table and shelf, {"sdf": {"human": mode}} for hri; "analytic" on any
+// other env is an empty override, "learned" there is an error (no shipped model).
 nlohmann::json sdf_flag_override(const std::string& env, const std::string& mode);
 
 }  // namespace atacom

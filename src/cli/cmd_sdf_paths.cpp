@@ -1,0 +1,28 @@
+// atacom sdf-paths: accuracy of an env's learned distance field along the
+// arm's points of interest during random-alpha ATACOM rollouts (docs/sdf.md).
+#include <iostream>
+
+#include "cli/command.hpp"
+#include "train/sdf_path_accuracy.hpp"
+
+namespace {
+
+atacom::cli::RegisterCommand reg(
+    {"sdf-paths", "learned vs analytic distance and gradient along the arm's PoIs in ATACOM rollouts (one JSON line)",
+     [](CLI::App& app) -> std::function<int()> {
+       auto c = std::make_shared<atacom::SdfPathConfig>();
+       app.add_option("--env", c->env, "table | shelf | hri (the human)")
+           ->required()
+           ->check(CLI::IsMember({"table", "shelf", "hri"}));
+       app.add_option("--steps", c->steps, "env steps over all envs")->check(CLI::Range(1L, 100000000L));
+       app.add_option("--envs", c->envs, "parallel envs")->check(CLI::Range(1, 65536));
+       app.add_option("--seed", c->seed, "seed of the envs and the random alpha");
+       app.add_option("--safety", c->safety, "atacom | none (raw random actions)")->check(CLI::IsMember({"atacom", "none"}));
+       app.add_option("--split", c->split, "hri: motion split (train | test)")->check(CLI::IsMember({"train", "test"}));
+       return [c] {
+         std::cout << atacom::sdf_path_accuracy(*c).dump() << std::endl;
+         return 0;
+       };
+     }});
+
+}  // namespace
