@@ -196,22 +196,22 @@ std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::st
                                "); wait for it or scancel it, then submit again");
   }
   const std::vector<SweepCell> cells = sweep_cells(spec);
-  std::vector<size_t> todo;
+  std::vector<size_t> pending;
   for (size_t k = 0; k < cells.size(); ++k)
-    if (run_files_state(dir, cells[k]) != "done") todo.push_back(k);
-  if (todo.empty()) {
+    if (run_files_state(dir, cells[k]) != "done") pending.push_back(k);
+  if (pending.empty()) {
     log << "sweep: every run of " << dir << " is done; nothing to submit\n";
     return {};
   }
   for (const char* sub : {"inputs", "logs", "state", "runs"}) fs::create_directories(fs::path(dir) / sub);
-  for (size_t k : todo) {
+  for (size_t k : pending) {
     const std::string p = (fs::path(dir) / "inputs" / (cells[k].name() + ".json")).string();
     if (!fs::exists(p)) write_file_atomic(p, cells[k].config.dump(2) + "\n");
   }
   nlohmann::json tasks = nlohmann::json::array();
-  for (size_t i = 0; i < todo.size(); i += size_t(o.runs_per_task)) {
+  for (size_t i = 0; i < pending.size(); i += size_t(o.runs_per_task)) {
     nlohmann::json t = nlohmann::json::array();
-    for (size_t j = i; j < std::min(todo.size(), i + size_t(o.runs_per_task)); ++j) t.push_back(todo[j]);
+    for (size_t j = i; j < std::min(pending.size(), i + size_t(o.runs_per_task)); ++j) t.push_back(pending[j]);
     tasks.push_back(t);
   }
   const std::string stamp = utc_now();
@@ -238,7 +238,7 @@ std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::st
     log << "sweep: submitted job " << id << " (array 0-" << n - 1 << ", " << o.runs_per_task << " runs per task; logs "
         << sub.string() << "/task-" << id << "_<i>.log)\n";
   }
-  log << "sweep: " << todo.size() << " runs in " << tasks.size() << " tasks; `atacom sweep status " << dir_in
+  log << "sweep: " << pending.size() << " runs in " << tasks.size() << " tasks; `atacom sweep status " << dir_in
       << "` follows them\n";
   return ids;
 }
