@@ -100,7 +100,7 @@ SweepSpec parse_sweep_spec(const nlohmann::json& j) {
     try {
       resolve_run_config(c.config);
     } catch (const std::exception& e) {
-      throw std::invalid_argument("sweep cell " + c.name() + ": " + e.what());
+      throw std::invalid_argument("sweep cell " + printable_text(c.name()) + ": " + e.what());
     }
   }
   return s;
