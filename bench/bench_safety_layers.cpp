@@ -11,7 +11,8 @@
 // share of envs whose a_pi was kept, corrected in closed form, solved as a
 // QP, or infeasible, and the mean iteration count.
 //
-// Usage: bench_safety_layers [--quick]
+// Usage: bench_safety_layers [--quick] [--only random|table|nav]
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -98,16 +99,31 @@ void run(Case& c, bool quick) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
-  {
+  bool quick = false;
+  std::string only;  // one input family, or all
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) {
+      quick = true;
+    } else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
+      only = argv[++i];
+      if (only != "random" && only != "table" && only != "nav") {
+        std::fprintf(stderr, "bench_safety_layers: --only takes random, table or nav, not '%s'\n", only.c_str());
+        return 2;
+      }
+    } else {
+      std::fprintf(stderr, "usage: bench_safety_layers [--quick] [--only random|table|nav]\n");
+      return 2;
+    }
+  }
+  auto wanted = [&](const char* inputs) { return only.empty() || only == inputs; };
+  if (wanted("random")) {
     Case c = random_case(7, 7, 34, 1);
     run(c, quick);
-  }
-  {
-    Case c = random_case(3, 2, 5, 2);
-    run(c, quick);
+    Case c2 = random_case(3, 2, 5, 2);
+    run(c2, quick);
   }
   for (const char* env : {"table", "nav"}) {
+    if (!wanted(env)) continue;
     Case c = env_case(env, 3);
     run(c, quick);
   }

@@ -224,10 +224,12 @@ void solve_env(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLayerBatc
     if (mod.g_form == GForm::Diagonal) {
       for (int j = 0; j < m; ++j) gi[j] = row[j] * dtG[j];
     } else {
-      std::fill_n(gi, m, 0.0);
-      for (int l = 0; l < n; ++l) {
-        const double jl = dt * row[l];
-        for (int j = 0; j < m; ++j) gi[j] += jl * G[size_t(l) * m + j];
+      // Summed in a register per column (accumulating into gi[j] in memory
+      // chained every multiply-add through a store; same order, same bits).
+      for (int j = 0; j < m; ++j) {
+        double s = 0.0;
+        for (int l = 0; l < n; ++l) s += (dt * row[l]) * G[size_t(l) * m + j];
+        gi[j] = s;
       }
     }
     if (f)
