@@ -85,6 +85,34 @@ static inline vd load_strided(const double* base, int stride, int count) {
   return v;
 }
 
+#if defined(__AVX512F__)
+static_assert(kLanes == 8);
+// GCC 12 flags its own _mm512_undefined_pd inside the unpack intrinsics.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+// In-register 8 x 8 transpose of doubles: pairs, then 128-bit blocks, then
+// 256-bit halves (24 shuffles). Its own inverse.
+static inline void transpose8x8(__m512d r[8]) {
+  const __m512d t0 = _mm512_unpacklo_pd(r[0], r[1]), t1 = _mm512_unpackhi_pd(r[0], r[1]);
+  const __m512d t2 = _mm512_unpacklo_pd(r[2], r[3]), t3 = _mm512_unpackhi_pd(r[2], r[3]);
+  const __m512d t4 = _mm512_unpacklo_pd(r[4], r[5]), t5 = _mm512_unpackhi_pd(r[4], r[5]);
+  const __m512d t6 = _mm512_unpacklo_pd(r[6], r[7]), t7 = _mm512_unpackhi_pd(r[6], r[7]);
+  const __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
+  const __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
+  const __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
+  const __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
+  r[0] = _mm512_shuffle_f64x2(u0, u4, 0x88);
+  r[1] = _mm512_shuffle_f64x2(u1, u5, 0x88);
+  r[2] = _mm512_shuffle_f64x2(u2, u6, 0x88);
+  r[3] = _mm512_shuffle_f64x2(u3, u7, 0x88);
+  r[4] = _mm512_shuffle_f64x2(u0, u4, 0xDD);
+  r[5] = _mm512_shuffle_f64x2(u1, u5, 0xDD);
+  r[6] = _mm512_shuffle_f64x2(u2, u6, 0xDD);
+  r[7] = _mm512_shuffle_f64x2(u3, u7, 0xDD);
+}
+#pragma GCC diagnostic pop
+#endif
+
 // dst[idx][l] = src[l][idx] for idx < count: `count` consecutive doubles of
 // each lane's env into lane vectors. With AVX-512, 8 x 8 tiles are
 // transposed in registers (8 loads, 24 shuffles, 8 stores instead of 64
@@ -92,30 +120,32 @@ static inline vd load_strided(const double* base, int stride, int count) {
 // elements are never read, so no access past src[l] + count).
 static inline void gather_rows(const double* const src[kLanes], int count, vd* dst) {
 #if defined(__AVX512F__)
-  static_assert(kLanes == 8);
   for (int idx = 0; idx < count; idx += 8) {
     const int t = count - idx < 8 ? count - idx : 8;
     const __mmask8 mask = static_cast<__mmask8>((1u << t) - 1u);
     __m512d r[8];
     for (int l = 0; l < 8; ++l) r[l] = _mm512_maskz_loadu_pd(mask, src[l] + idx);
-    // pairs, then 128-bit blocks, then 256-bit halves
-    const __m512d t0 = _mm512_unpacklo_pd(r[0], r[1]), t1 = _mm512_unpackhi_pd(r[0], r[1]);
-    const __m512d t2 = _mm512_unpacklo_pd(r[2], r[3]), t3 = _mm512_unpackhi_pd(r[2], r[3]);
-    const __m512d t4 = _mm512_unpacklo_pd(r[4], r[5]), t5 = _mm512_unpackhi_pd(r[4], r[5]);
-    const __m512d t6 = _mm512_unpacklo_pd(r[6], r[7]), t7 = _mm512_unpackhi_pd(r[6], r[7]);
-    const __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
-    const __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
-    const __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
-    const __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
-    const __m512d out[8] = {_mm512_shuffle_f64x2(u0, u4, 0x88), _mm512_shuffle_f64x2(u1, u5, 0x88),
-                            _mm512_shuffle_f64x2(u2, u6, 0x88), _mm512_shuffle_f64x2(u3, u7, 0x88),
-                            _mm512_shuffle_f64x2(u0, u4, 0xDD), _mm512_shuffle_f64x2(u1, u5, 0xDD),
-                            _mm512_shuffle_f64x2(u2, u6, 0xDD), _mm512_shuffle_f64x2(u3, u7, 0xDD)};
-    for (int q = 0; q < t; ++q) dst[idx + q] = (vd)out[q];
+    transpose8x8(r);
+    for (int q = 0; q < t; ++q) dst[idx + q] = (vd)r[q];
   }
 #else
   for (int idx = 0; idx < count; ++idx)
     for (int l = 0; l < kLanes; ++l) dst[idx][l] = src[l][idx];
 #endif
+}
+
+// Inverse of gather_rows: dst[l][idx] = src[idx][l] for idx < count.
+static inline void scatter_rows(const vd* src, int count, double* const dst[kLanes]) {
+  int idx = 0;
+#if defined(__AVX512F__)
+  for (; idx + 8 <= count; idx += 8) {
+    __m512d r[8];
+    for (int l = 0; l < 8; ++l) r[l] = (__m512d)src[idx + l];
+    transpose8x8(r);
+    for (int l = 0; l < 8; ++l) _mm512_storeu_pd(dst[l] + idx, r[l]);
+  }
+#endif
+  for (; idx < count; ++idx)
+    for (int l = 0; l < kLanes; ++l) dst[l][idx] = src[idx][l];
 }
 }  // namespace atacom::lanes

@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #if defined(__AVX512F__)
@@ -36,6 +37,7 @@
 
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
+#include "kernels/lanes.hpp"
 
 namespace atacom {
 
@@ -185,67 +187,11 @@ struct LaneScratch {
   }
 };
 
-// GCC 12 flags its own _mm512_undefined_pd inside the unpack intrinsics.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#if defined(__AVX512F__)
-static_assert(kLanes == 8);
-// In-register 8 x 8 transpose of doubles: pairs, then 128-bit blocks, then
-// 256-bit halves (24 shuffles).
-inline void transpose8x8(__m512d r[8]) {
-  const __m512d t0 = _mm512_unpacklo_pd(r[0], r[1]), t1 = _mm512_unpackhi_pd(r[0], r[1]);
-  const __m512d t2 = _mm512_unpacklo_pd(r[2], r[3]), t3 = _mm512_unpackhi_pd(r[2], r[3]);
-  const __m512d t4 = _mm512_unpacklo_pd(r[4], r[5]), t5 = _mm512_unpackhi_pd(r[4], r[5]);
-  const __m512d t6 = _mm512_unpacklo_pd(r[6], r[7]), t7 = _mm512_unpackhi_pd(r[6], r[7]);
-  const __m512d u0 = _mm512_shuffle_f64x2(t0, t2, 0x88), u1 = _mm512_shuffle_f64x2(t1, t3, 0x88);
-  const __m512d u2 = _mm512_shuffle_f64x2(t0, t2, 0xDD), u3 = _mm512_shuffle_f64x2(t1, t3, 0xDD);
-  const __m512d u4 = _mm512_shuffle_f64x2(t4, t6, 0x88), u5 = _mm512_shuffle_f64x2(t5, t7, 0x88);
-  const __m512d u6 = _mm512_shuffle_f64x2(t4, t6, 0xDD), u7 = _mm512_shuffle_f64x2(t5, t7, 0xDD);
-  r[0] = _mm512_shuffle_f64x2(u0, u4, 0x88);
-  r[1] = _mm512_shuffle_f64x2(u1, u5, 0x88);
-  r[2] = _mm512_shuffle_f64x2(u2, u6, 0x88);
-  r[3] = _mm512_shuffle_f64x2(u3, u7, 0x88);
-  r[4] = _mm512_shuffle_f64x2(u0, u4, 0xDD);
-  r[5] = _mm512_shuffle_f64x2(u1, u5, 0xDD);
-  r[6] = _mm512_shuffle_f64x2(u2, u6, 0xDD);
-  r[7] = _mm512_shuffle_f64x2(u3, u7, 0xDD);
-}
-#endif
-
-// Copy `count` consecutive doubles of each lane's source into lane vectors
-// (dst[idx][l] = src[l][idx]). With AVX-512 whole 8 x 8 tiles are
-// transposed in registers (8 loads, 24 shuffles, 8 stores instead of 64
-// scalar moves each way); the scalar loop handles the rest.
-void gather_lanes(const double* const src[kLanes], int count, V* dst) {
-  int idx = 0;
-#if defined(__AVX512F__)
-  for (; idx + 8 <= count; idx += 8) {
-    __m512d r[8];
-    for (int l = 0; l < 8; ++l) r[l] = _mm512_loadu_pd(src[l] + idx);
-    transpose8x8(r);
-    for (int l = 0; l < 8; ++l) dst[idx + l] = r[l];
-  }
-#endif
-  for (; idx < count; ++idx)
-    for (int l = 0; l < kLanes; ++l) dst[idx][l] = src[l][idx];
-}
-
-// Inverse of gather_lanes: dst[l][idx] = src[idx][l] for all 8 lanes (the
-// 8 x 8 transpose is its own inverse).
-void scatter_lanes(const V* src, int count, double* const dst[kLanes]) {
-  int idx = 0;
-#if defined(__AVX512F__)
-  for (; idx + 8 <= count; idx += 8) {
-    __m512d r[8];
-    for (int l = 0; l < 8; ++l) r[l] = src[idx + l];
-    transpose8x8(r);
-    for (int l = 0; l < 8; ++l) _mm512_storeu_pd(dst[l] + idx, r[l]);
-  }
-#endif
-  for (; idx < count; ++idx)
-    for (int l = 0; l < kLanes; ++l) dst[l][idx] = src[idx][l];
-}
-#pragma GCC diagnostic pop
+// Env-major inputs to lane vectors and back: kernels/lanes.hpp's 8 x 8
+// register transposes (V is the same vector type as lanes::vd).
+static_assert(std::is_same_v<V, lanes::vd> && kLanes == lanes::kLanes);
+inline void gather_lanes(const double* const src[kLanes], int count, V* dst) { lanes::gather_rows(src, count, dst); }
+inline void scatter_lanes(const V* src, int count, double* const dst[kLanes]) { lanes::scatter_rows(src, count, dst); }
 
 // Fast path over envs [lo, hi), hi - lo <= kLanes. MC is m when it is a
 // compile-time constant (loops over m then unroll), 0 otherwise.

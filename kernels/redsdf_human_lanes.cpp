@@ -30,7 +30,6 @@ void learned_human_distance_lanes(const LearnedHuman& o, const double* pose, con
   }
   o.batch->evaluate_range(p, q, false, 0, int64_t(npoi) * L, dd, gg, gq);
   for (int l = 0; l < L; ++l) {
-    const double* x = pose + size_t(std::min(l, cnt - 1)) * kHumanPoseDim;
     const double* xd = rate + size_t(std::min(l, cnt - 1)) * kHumanPoseDim;
     const double c = cs[l], s = sn[l];
     // Rz^T rdot, and the yaw rate.
