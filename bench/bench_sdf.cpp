@@ -1,11 +1,12 @@
 // bench_sdf: points per second of a distance field with its gradient,
 // learned (ReDSDF, batched float32, kernels/redsdf_batch.hpp) vs analytic
 // (exact primitives, SIMD lanes of 8 doubles, kernels/sdf_impl.hpp), for the
-// shelf (8 boxes) and the human (16 capsules), at N envs x PoIs points, 1 and
-// 2 threads. Learned lines carry FLOPs per point and their share of the
+// shelf (8 boxes), the human (16 capsules) and the TIAGo body (cylinder, box,
+// sphere; smooth union as in the body rows; the learned field takes the torso
+// lift, 0.1 m as on table and shelf), at N envs x PoIs points, 1 and 2 threads. Learned lines carry FLOPs per point and their share of the
 // measured float GEMM rate at the network's layer shape (gemm_peak lines).
 //
-// Weights: the shipped data/sdf/shelf and data/sdf/human models when present
+// Weights: the shipped data/sdf/shelf, data/sdf/human and data/sdf/tiago models when present
 // (the human's takes the 34 joint angles, in its body frame); the other human
 // networks (pose 38) have random weights: dense layers cost the same whatever
 // the values, so their rate is that of a trained network of that size.
@@ -25,6 +26,7 @@
 #include "kernels/sdf_impl.hpp"
 #include "src/core/data_dir.hpp"
 #include "train/redsdf_train.hpp"
+#include "train/sdf_tiago_data.hpp"
 #include "train/tensor.hpp"
 
 using namespace atacom;
@@ -47,7 +49,7 @@ std::vector<double> sample_points(int64_t n, const Eigen::Vector3d& lo, const Ei
 
 // Analytic: lanes of 8 points, structure-of-arrays per lane group.
 void bench_analytic(const std::string& object, const std::vector<Shape>& shapes, const std::vector<double>& p, int N,
-                    int poi, int threads) {
+                    int poi, int threads, double blend = 0.0) {
   set_num_threads(threads);
   const int64_t n = int64_t(N) * poi, groups = n / lanes::kLanes;
   std::vector<double> soa(size_t(groups) * 3 * lanes::kLanes), d(static_cast<size_t>(n)), g(static_cast<size_t>(3 * n));
@@ -59,7 +61,7 @@ void bench_analytic(const std::string& object, const std::vector<Shape>& shapes,
       for (int64_t q = lo; q < hi; ++q) {
         lanes::vd P[3], G[3];
         for (int k = 0; k < 3; ++k) P[k] = lanes::load(&soa[size_t((q * 3 + k) * lanes::kLanes)]);
-        const lanes::vd dd = sdf_impl::union_of<lanes::vd>(shapes.data(), int(shapes.size()), 0.0, P, G);
+        const lanes::vd dd = sdf_impl::union_of<lanes::vd>(shapes.data(), int(shapes.size()), blend, P, G);
         lanes::store(&d[size_t(q * lanes::kLanes)], dd);
         for (int k = 0; k < 3; ++k) lanes::store(&g[size_t((q * 3 + k) * lanes::kLanes)], G[k]);
       }
@@ -67,7 +69,8 @@ void bench_analytic(const std::string& object, const std::vector<Shape>& shapes,
   };
   const double per_s = best_rate(run) * double(groups * lanes::kLanes);
   bench::emit({{"bench", "sdf"}, {"object", object}, {"kind", "analytic"}, {"N", N}, {"poi", poi},
-               {"threads", threads}, {"per_s", per_s}, {"primitives", shapes.size()}, {"precision", "float64"}});
+               {"threads", threads}, {"per_s", per_s}, {"primitives", shapes.size()}, {"blend", blend},
+               {"precision", "float64"}});
 }
 
 // Eigen float GEMM (rows x k) (k x m), one independent product per thread: GFLOP/s per thread.
@@ -173,6 +176,29 @@ int main(int argc, char** argv) {
   for (int64_t i = 0; i < n; ++i)
     for (int k = 0; k < kHumanDofs; ++k) joints[size_t(i * kHumanDofs + k)] = float(hb.pose[size_t(kHumanRootDofs + k)]);
   const RedsdfModel human_ref = human_net({512, 512, 512, 512, 512});
+  // TIAGo body at the table/shelf torso lift.
+  const float lift = 0.1f;
+  const ShapeUnion body = tiago_body_geometry(lift);
+  Eigen::Vector3d blo = Eigen::Vector3d::Constant(1e9), bhi = -blo;
+  for (const Shape& sh : body.shapes) {
+    const Eigen::Vector3d c(sh.a[0], sh.a[1], sh.a[2]);
+    const Eigen::Vector3d h = sh.type == ShapeType::Box ? Eigen::Vector3d(sh.half[0], sh.half[1], sh.half[2])
+                              : sh.type == ShapeType::CylinderZ ? Eigen::Vector3d(sh.radius, sh.radius, sh.half[2])
+                                                                : Eigen::Vector3d::Constant(sh.radius);
+    blo = blo.cwiseMin(c - h), bhi = bhi.cwiseMax(c + h);
+  }
+  const std::vector<double> pb = sample_points(n, blo, bhi);
+  const std::vector<float> lifts(static_cast<size_t>(n), lift);
+  const std::string shipped_tiago = data_dir() + "/sdf/tiago";
+  RedsdfModel tiago_model;
+  std::string tiago_weights = "shipped " + shipped_tiago;
+  if (std::filesystem::exists(shipped_tiago + "/redsdf.bin")) {
+    tiago_model = load_redsdf(shipped_tiago, "tiago");
+  } else {
+    tiago_model = RedsdfModel(default_sdf_train_config("tiago").arch);
+    init_redsdf(tiago_model, 1);
+    tiago_weights = "random (throughput only)";
+  }
   for (int threads : {1, 2}) {
     bench_analytic("shelf", shelf.shapes, ps, N, poi, threads);
     bench_learned("shelf", shelf_weights, shelf_model, ps, pose, N, poi, threads);
@@ -180,6 +206,8 @@ int main(int argc, char** argv) {
     if (have_human) bench_learned("human", "shipped " + shipped_human, human_shipped, ph, joints, N, poi, threads);
     bench_learned("human", "random (throughput only)", human_small, ph, pose, N, poi, threads);
     bench_learned("human", "random (throughput only), the reference's 5 x 512", human_ref, ph, pose, N, poi, threads);
+    bench_analytic("tiago", body.shapes, pb, N, poi, threads, body.blend);
+    bench_learned("tiago", tiago_weights, tiago_model, pb, lifts, N, poi, threads);
   }
   return 0;
 }

@@ -37,6 +37,7 @@ struct ArmKernelConst {
   double ground_h[2];
   std::vector<ArmGtItem> items;
   const LearnedObstacle* learned_obstacle = nullptr;  // set: the obstacle rows use this field (not `obstacle`)
+  const LearnedObstacle* learned_body = nullptr;      // set: the body rows use this field (not `body`)
   // HRI (hri == false: unused)
   bool hri = false;
   HumanRowsConst human{};                // thresholds of the human rows
@@ -74,8 +75,9 @@ static inline void arm_constraints_lanes(const ArmKernelConst& k, const vd* q, c
   }
   const int n_body = static_cast<int>(k.body.size());
   // A learned field runs all PoIs of the lane block as one network batch.
-  vd d_learned[kArmPoi], g_learned[kArmPoi][3];
+  vd d_learned[kArmPoi], g_learned[kArmPoi][3], d_body_learned[kArmPoi], g_body_learned[kArmPoi][3];
   if (k.learned_obstacle) learned_distance_lanes(*k.learned_obstacle, fk.poi, kArmPoi, d_learned, with_grad ? g_learned : nullptr);
+  if (k.learned_body) learned_distance_lanes(*k.learned_body, fk.poi, kArmPoi, d_body_learned, with_grad ? g_body_learned : nullptr);
   for (int i = 0; i < kArmPoi; ++i) {
     vd g[3];
     vd d_obs;
@@ -89,7 +91,13 @@ static inline void arm_constraints_lanes(const ArmKernelConst& k, const vd* q, c
     if (with_grad)
       for (int j = 0; j < kArmJoints; ++j)
         o.J[kRowScene - kRowScene + i][j] = -(g[0] * fk.Jp[i][0][j] + g[1] * fk.Jp[i][1][j] + g[2] * fk.Jp[i][2][j]);
-    const vd d_body = sdf_impl::union_of<vd>(k.body.data(), n_body, k.body_blend, fk.poi[i], with_grad ? g : nullptr);
+    vd d_body;
+    if (k.learned_body) {
+      d_body = d_body_learned[i];
+      if (with_grad) g[0] = g_body_learned[i][0], g[1] = g_body_learned[i][1], g[2] = g_body_learned[i][2];
+    } else {
+      d_body = sdf_impl::union_of<vd>(k.body.data(), n_body, k.body_blend, fk.poi[i], with_grad ? g : nullptr);
+    }
     o.c[kRowBody + i] = k.delta_body[i] - d_body;
     if (with_grad)
       for (int j = 0; j < kArmJoints; ++j)

@@ -1,7 +1,8 @@
 // Learned obstacle fields in the arm envs: the shipped table and shelf models
 // placed in the scene (yaw 90 and 180) agree with the analytic rows, bad
 // "sdf" settings fail before any step with the key named, and random-alpha
-// ATACOM rollouts with learned rows never collide with the exact geometry.
+// ATACOM rollouts with learned rows (obstacle and robot body) never collide
+// with the exact geometry.
 #include <catch2/catch.hpp>
 
 #include "atacom/projector.hpp"
@@ -60,12 +61,13 @@ TEST_CASE("bad learned-field settings fail at construction with the key named", 
   CHECK_THROWS_WITH(ArmEnv(config_with(ArmTask::Table, "learned:/nonexistent/sdf"), 1), Catch::Contains("cannot be opened"));
   CHECK_THROWS_WITH(ArmEnv(config_with(ArmTask::Table, "learned:data/sdf/shelf"), 1),
                     Catch::Contains("holds object 'shelf', expected 'table'"));
-  CHECK(sdf_flag_override("table", "learned") == nlohmann::json{{"sdf", {{"table", "learned"}}}});
+  CHECK(sdf_flag_override("table", "learned") == nlohmann::json{{"sdf", {{"table", "learned"}, {"tiago", "learned"}}}});
   CHECK(sdf_flag_override("nav", "analytic").empty());
   CHECK_THROWS_WITH(sdf_flag_override("nav", "learned"), Catch::Contains("no field with a shipped learned model"));
 }
 
-TEST_CASE("random-alpha ATACOM with learned table and shelf fields: zero exact-geometry collisions", "[arm_env][redsdf][slow]") {
+// --sdf learned: the obstacle's and the robot body's learned fields together.
+TEST_CASE("random-alpha ATACOM with learned table/shelf and body fields: zero exact-geometry collisions", "[arm_env][redsdf][slow]") {
   for (const char* env : {"table", "shelf"}) {
     RolloutConfig rc;
     rc.env = env;

@@ -211,7 +211,7 @@ TEST_CASE("hri with the shipped learned human: rows agree with the analytic rows
   CHECK(near > 10);
   CHECK(worst < 0.06);
   // Settings.
-  CHECK(sdf_flag_override("hri", "learned") == nlohmann::json{{"sdf", {{"human", "learned"}}}});
+  CHECK(sdf_flag_override("hri", "learned") == nlohmann::json{{"sdf", {{"human", "learned"}, {"tiago", "learned"}}}});
   ArmEnvConfig bad = ca;
   bad.sdf = {{"human", "learned:data/sdf/table"}};
   CHECK_THROWS_WITH(ArmEnv(bad, 1), Catch::Contains("holds object 'table', expected 'human'"));

@@ -1,7 +1,7 @@
 // The --sdf flag on the command line: applied on hri (the learned human),
 // refused clearly with --policy trained and --resume (the run's own env
 // config decides there) and on envs without a shipped model; sdf-train
-// refuses the robot body (not implemented) by name.
+// trains the robot body, and a missing body file stops rollout at once.
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
@@ -57,7 +57,25 @@ TEST_CASE("sdf cli: --sdf learned runs hri with the learned human, and is refuse
   CHECK(nav.rc != 0);
   CHECK_THAT(nav.out, Catch::Contains("no field with a shipped learned model"));
 
-  const Result tiago = atacom_cli("sdf-train --object tiago --out " + (fs::temp_directory_path() / "atacom_sdf_tiago").string());
-  CHECK(tiago.rc != 0);
-  CHECK_THAT(tiago.out, Catch::Contains("--object tiago: the robot-body field is not implemented"));
+}
+
+TEST_CASE("sdf cli: sdf-train --object tiago writes a body model, a bad body file stops rollout before any step", "[redsdf][cli]") {
+  const fs::path dir = fs::temp_directory_path() / ("atacom_sdf_tiago_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const Result tiago = atacom_cli("--threads 1 sdf-train --object tiago --out " + (dir / "m").string() +
+                                  " --epochs 1 --surface-points 2 --hidden 16,16,16 --batch 256 --quiet");
+  INFO(tiago.out);
+  REQUIRE(tiago.rc == 0);
+  std::ifstream mf(dir / "m" / "manifest.json");
+  const auto man = nlohmann::json::parse(mf);
+  CHECK(man["object"] == "tiago");
+  CHECK(man["arch"]["pose_dim"] == 1);
+  CHECK_THAT(man["command"].get<std::string>(), Catch::Contains("--object tiago"));
+  for (const char* f : {"redsdf.bin", "progress.csv", "learning_curve.svg", "config.json"}) CHECK(fs::exists(dir / "m" / f));
+
+  std::ofstream(dir / "bad.json") << R"({"sdf": {"tiago": "learned:)" << (dir / "missing").string() << "\"}}\n";
+  const Result bad = atacom_cli("rollout --env shelf --policy random --steps 10 --envs 1 --config " + (dir / "bad.json").string());
+  fs::remove_all(dir);
+  CHECK(bad.rc != 0);
+  CHECK_THAT(bad.out, Catch::Contains("cannot be opened"));
 }

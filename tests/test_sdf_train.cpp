@@ -34,7 +34,7 @@ TEST_CASE("sdf data: labels are the scene's smooth union (never above the exact 
     CHECK(std::abs(e.y[size_t(i)] - union_distance_exact(table, p)) < 1e-6);
   }
   CHECK_THROWS_WITH(sdf_object_geometry("human"), Catch::Contains("static-object geometry exists for table and shelf only"));
-  CHECK_THROWS_WITH(sdf_object_geometry("tiago"), Catch::Contains("--object tiago: the robot-body field is not implemented"));
+  CHECK_THROWS_WITH(sdf_object_geometry("tiago"), Catch::Contains("static-object geometry exists for table and shelf only"));
 }
 
 TEST_CASE("sdf training: short run lowers the error, writes its files, same weights for 1 and 2 threads", "[redsdf]") {

@@ -19,6 +19,7 @@
 #include "train/adam.hpp"
 #include "train/autodiff.hpp"
 #include "train/sdf_human_data.hpp"
+#include "train/sdf_tiago_data.hpp"
 
 namespace atacom {
 
@@ -63,6 +64,15 @@ SdfTrainConfig default_sdf_train_config(const std::string& object) {
     c.max_epochs = 60;
     return c;
   }
+  if (object == "tiago") {
+    // Pose-conditioned on the torso lift only (train/sdf_tiago_data.hpp).
+    c.arch.pose_dim = 1;
+    c.arch.centre = tiago_body_centre();
+    c.data.poses = 600;
+    c.data.surface_points = 40;
+    c.max_epochs = 300;
+    return c;
+  }
   sdf_object_geometry(object, &c.arch.centre);  // validates the name
   c.arch.pose_dim = 0;
   return c;
@@ -92,8 +102,6 @@ void from_json(const json& j, SdfTrainConfig& c) {
 }
 
 ShapeUnion sdf_object_geometry(const std::string& object, Eigen::Vector3d* centre) {
-  if (object == "tiago")
-    throw std::invalid_argument("--object tiago: the robot-body field is not implemented (table, shelf and human are)");
   if (object != "table" && object != "shelf")
     throw std::invalid_argument("--object " + object + ": static-object geometry exists for table and shelf only");
   ArmSceneConfig sc = default_arm_scene_config(parse_arm_task(object));
@@ -222,6 +230,9 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
     const HumanModel hm = load_human_model();
     centre = human_centre(hm);
     s = make_human_sdf_samples(hm, load_default_human_motion(), cfg.data);
+  } else if (cfg.object == "tiago") {
+    centre = tiago_body_centre();
+    s = make_tiago_sdf_samples(cfg.data);
   } else {
     s = make_static_sdf_samples(sdf_object_geometry(cfg.object, &centre), cfg.data);
   }
@@ -348,6 +359,8 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
                 {"frame", cfg.object == "human"
                               ? "body frame: p_body = Rz(yaw)^T (p - (x, y, z)) of the human's root; pose input = the 34 "
                                 "joint angles (pose entries 4..37)"
+                          : cfg.object == "tiago"
+                              ? "base_footprint; pose input = the torso lift, m (trained on [0, 0.35])"
                               : "object frame: the arm scene's object at position 0, yaw 0 (base_footprint axes)"}};
   m.manifest["metrics"] = {{"test", sdf_accuracy(m, s, te)}};
   // The margin a learned row adds to its threshold: the largest over-estimate

@@ -20,7 +20,7 @@
 namespace atacom {
 
 struct SdfTrainConfig {
-  std::string object = "table";  // table | shelf
+  std::string object = "table";  // table | shelf | human | tiago
   RedsdfArch arch;
   SdfDataConfig data;
   int batch = 1024;

@@ -25,7 +25,7 @@ struct SdfDataConfig {
   std::vector<double> epsilons;                // signed offsets along the normal, m
   double volume_fraction = 0.2;                // extra uniform samples, as a fraction of the surface ones
   double volume_margin = 0.8;                  // the uniform box: object bounds grown by this, m
-  int poses = 1;                               // human only: poses from the motion library's training split
+  int poses = 1;                               // human: poses of the motion library's training split; tiago: torso lifts
   double blend = -1.0;                         // labels' smooth-union k, m: -1 = the object's own
                                                // (the env's rows), 0 = the exact min
   uint64_t seed = 1;

@@ -94,9 +94,11 @@ ArmEnv::ArmEnv(const ArmEnvConfig& config, int num_envs) : config_(config) {
   }
   kern->learned = load_arm_learned_obstacle(config_.sdf, config_.scene);
   k.learned_obstacle = kern->learned.get();
+  kern->learned_body = load_arm_learned_body(config_.sdf, config_.torso_lift);
+  k.learned_body = kern->learned_body.get();
   for (int i = 0; i < kArmPoi; ++i) {
     k.delta_obstacle[i] = model_.scene_cover[i] + config_.obstacle.margin[i] + (kern->learned ? kern->learned->margin : 0.0);
-    k.delta_body[i] = model_.body_cover[i] + config_.body.margin[i];
+    k.delta_body[i] = model_.body_cover[i] + config_.body.margin[i] + (kern->learned_body ? kern->learned_body->margin : 0.0);
     row_offset_[kRowScene + i] = k.delta_obstacle[i];
     row_offset_[kRowBody + i] = k.delta_body[i];
   }

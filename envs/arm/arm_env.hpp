@@ -102,7 +102,7 @@ struct ArmEnvConfig {
   uint64_t goal_library_seed = 1;   // their RNG seed (a property of the task, not of the run)
   double goal_jitter = 0.1;         // per-reset perturbation of a library configuration, rad
   std::array<double, kArmJoints> home{};  // fallback initial configuration (must satisfy the constraints)
-  // Distance fields by object (key "table" or "shelf", the env's own):
+  // Distance fields by object (key "table" or "shelf", the env's own; "human" on hri; "tiago", the robot body):
   // "analytic" (default), "learned" (the shipped data/sdf/<object>) or
   // "learned:<dir>" (envs/arm/arm_learned_sdf.hpp). Absent = analytic.
   std::map<std::string, std::string> sdf;

@@ -93,8 +93,8 @@ ArmEnvConfig default_arm_env_config(ArmTask task) {
   ArmEnvConfig c;
   c.task = task;
   c.scene = default_arm_scene_config(task);
-  // Learned fields: the table and shelf obstacles, HRI's human.
-  c.sdf = {{task == ArmTask::Hri ? std::string("human") : arm_task_name(task), "analytic"}};
+  // Learned fields: the table and shelf obstacles, HRI's human, the robot body.
+  c.sdf = {{task == ArmTask::Hri ? std::string("human") : arm_task_name(task), "analytic"}, {"tiago", "analytic"}};
   c.reward.desired_approach = {1.0, 0.0, 0.0};  // reach forward, gripper horizontal
   // Joint rows: 0.05 rad inside the URDF limits (the authors' base env clips
   // position targets 0.05 rad inside), beta 30 as in their joint-limit rows.

@@ -34,6 +34,7 @@ struct ArmEnv::Kernel {
   lanes::ArmKernelConst k;
   std::shared_ptr<LearnedObstacle> learned;  // the obstacle's learned field, or null (analytic)
   std::shared_ptr<LearnedHuman> learned_human;  // HRI: the human's learned field, or null (analytic)
+  std::shared_ptr<LearnedObstacle> learned_body;  // the robot body's learned field, or null (analytic)
   explicit Kernel(const TiagoArmModel& m) : k(m) {}
 };
 }  // namespace atacom

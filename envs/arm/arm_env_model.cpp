@@ -316,7 +316,8 @@ ArmEval ArmEnv::evaluate_reference(const double* q, const HumanFkResult* human) 
     const double d_obs = arm_scene_distance_reference(fk.poi[i], &g);
     ev.c(kRowScene + i) = row_offset_[kRowScene + i] - d_obs;
     ev.J.row(kRowScene + i) = -(g.transpose() * fk.J_poi[i]);
-    const double d_body = union_distance(scene_.body, fk.poi[i], &g);
+    const double d_body = kernel_->learned_body ? learned_distance_reference(*kernel_->learned_body, fk.poi[i], &g)
+                                                : union_distance(scene_.body, fk.poi[i], &g);
     ev.c(kRowBody + i) = row_offset_[kRowBody + i] - d_body;
     ev.J.row(kRowBody + i) = -(g.transpose() * fk.J_poi[i]);
   }

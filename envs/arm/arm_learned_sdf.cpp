@@ -53,12 +53,30 @@ std::shared_ptr<LearnedHuman> load_arm_learned_human(const std::map<std::string,
   return out;
 }
 
+std::shared_ptr<LearnedObstacle> load_arm_learned_body(const std::map<std::string, std::string>& sdf, double torso_lift) {
+  const auto it = sdf.find("tiago");
+  if (it == sdf.end()) return nullptr;
+  const std::string dir = learned_dir(it->first, it->second);
+  if (dir.empty()) return nullptr;
+  auto model = std::make_shared<RedsdfModel>(load_redsdf(dir, "tiago"));
+  if (model->arch.pose_dim != 1)
+    throw std::runtime_error("learned SDF " + dir + ": the robot body's field takes the torso lift as its one pose input (pose_dim " +
+                             std::to_string(model->arch.pose_dim) + ")");
+  auto out = std::make_shared<LearnedObstacle>();
+  out->model = model;
+  out->batch = std::make_shared<RedsdfBatch>(*model);
+  out->margin = checked_margin(*model, dir);
+  out->pose = {float(torso_lift)};  // base_footprint: R, t stay the identity
+  return out;
+}
+
 std::shared_ptr<LearnedObstacle> load_arm_learned_obstacle(const std::map<std::string, std::string>& sdf,
                                                            const ArmSceneConfig& scene) {
   const std::string object = arm_task_name(scene.task);
   std::shared_ptr<LearnedObstacle> out;
   for (const auto& [key, spec] : sdf) {
     if (key == "human" && scene.task == ArmTask::Hri) continue;  // load_arm_learned_human
+    if (key == "tiago") continue;                                 // load_arm_learned_body
     if (key != object)
       throw std::invalid_argument("config key 'env.sdf." + key + "' names no field of this env (" +
                                   (scene.task == ArmTask::Hri ? std::string("its field is human") : "its object is " + object) + ")");
@@ -80,11 +98,12 @@ std::shared_ptr<LearnedObstacle> load_arm_learned_obstacle(const std::map<std::s
 nlohmann::json sdf_flag_override(const std::string& env, const std::string& mode) {
   if (mode != "analytic" && mode != "learned")
     throw std::invalid_argument("--sdf is '" + mode + "', must be analytic or learned");
-  if (env == "table" || env == "shelf") return {{"sdf", {{env, mode}}}};
-  if (env == "hri") return {{"sdf", {{"human", mode}}}};
+  if (env == "table" || env == "shelf") return {{"sdf", {{env, mode}, {"tiago", mode}}}};
+  if (env == "hri") return {{"sdf", {{"human", mode}, {"tiago", mode}}}};
   if (mode == "analytic") return nlohmann::json::object();
   throw std::invalid_argument("--sdf learned: env '" + env +
-                              "' has no field with a shipped learned model (table, shelf and hri's human have)");
+                              "' has no field with a shipped learned model (table, shelf, hri's human and the arm envs' "
+                              "robot body have)");
 }
 
 }  // namespace atacom

@@ -1,4 +1,5 @@
-// Learned (ReDSDF) obstacle fields for the arm envs, resolved in one place:
+// Learned (ReDSDF) fields for the arm envs (the obstacle, HRI's human, the
+// robot body), resolved in one place:
 // the env config's "sdf" map and the `--sdf analytic|learned` flag of
 // `atacom rollout` / `atacom train`.
 //
@@ -29,9 +30,15 @@ std::shared_ptr<LearnedObstacle> load_arm_learned_obstacle(const std::map<std::s
 // analytic). Same errors as above; the model must take the 34 joint angles.
 std::shared_ptr<LearnedHuman> load_arm_learned_human(const std::map<std::string, std::string>& sdf);
 
-// Env config override for `--sdf mode` on env `env`: {"sdf": {object: mode}}
-// for table and shelf, {"sdf": {"human": mode}} for hri; "analytic" on any
-// other env is an empty override, "learned" there is an error (no shipped model).
+// The robot body's field per `sdf` (key "tiago", every arm env; null when
+// absent or analytic), with the env's torso lift as its pose input. Same
+// errors as above; the model must take one pose input (the torso lift).
+std::shared_ptr<LearnedObstacle> load_arm_learned_body(const std::map<std::string, std::string>& sdf, double torso_lift);
+
+// Env config override for `--sdf mode` on env `env`: {"sdf": {object: mode,
+// "tiago": mode}} for table and shelf, {"sdf": {"human": mode, "tiago": mode}}
+// for hri; "analytic" on any other env is an empty override, "learned" there
+// is an error (no shipped model).
 nlohmann::json sdf_flag_override(const std::string& env, const std::string& mode);
 
 }  // namespace atacom
