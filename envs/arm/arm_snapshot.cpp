@@ -1,82 +1,109 @@
-// ArmEnv snapshots: every per-env state vector and RNG stream; the cached
-// model is recomputed from q on load (a pure function of q, so bit-identical).
+// ArmEnv snapshots in the one env snapshot format (src/core/snapshot.hpp):
+// HEAD (env count, config fingerprint), ARMS (episode state and streams),
+// CACH (the cached model of the current state), HUMN (HRI: the moving
+// obstacle and the cup), BUFS. Read into a copy, swapped in at the end: a
+// refused snapshot leaves the env as it was.
 #include <istream>
 #include <ostream>
 #include <stdexcept>
 
 #include "envs/arm/arm_env.hpp"
+#include "src/core/snapshot.hpp"
 
 namespace atacom {
 
+namespace {
+constexpr uint32_t kTagArm = snapshot_tag("ARM ");
+constexpr uint32_t kTagState = snapshot_tag("ARMS");
+constexpr uint32_t kTagCache = snapshot_tag("CACH");
+constexpr uint32_t kTagHuman = snapshot_tag("HUMN");
+
+uint64_t fingerprint(const ArmEnvConfig& c) {
+  nlohmann::json j;
+  to_json(j, c);
+  return snapshot_fingerprint(j.dump());
+}
+std::string env_name(const ArmModel& m) { return m.spec.name + " env"; }
+}  // namespace
+
 void ArmEnv::save_state(std::ostream& out) const {
   const ArmBatch& b = batch_;
-  const int32_t N = num_envs();
-  out.write(reinterpret_cast<const char*>(&N), sizeof N);
-  out.write(reinterpret_cast<const char*>(&b.seed), sizeof b.seed);
-  auto put = [&](const auto& v) { out.write(reinterpret_cast<const char*>(v.data()), sizeof(v[0]) * v.size()); };
-  put(b.q);
-  put(b.goal);
-  put(b.t);
-  put(b.ret);
-  put(b.fallback);
-  for (const Rng& r : b.rng) {
-    const Rng::State st = r.state();
-    out.write(reinterpret_cast<const char*>(&st), sizeof st);
+  SnapshotWriter w(kTagArm, env_name(*model_));
+  write_head_section(w, num_envs(), fingerprint(config()));
+  {
+    std::ostream& s = w.section(kTagState);
+    bin::write_pod(s, b.seed);
+    bin::write_vec(s, b.q);
+    bin::write_vec(s, b.goal);
+    bin::write_vec(s, b.t);
+    bin::write_vec(s, b.ret);
+    bin::write_vec(s, b.fallback);
+    for (const Rng& r : b.rng) bin::write_rng(s, r);
   }
-  put(b.c);
-  put(b.J);
-  put(b.grasp);
-  put(b.approach);
+  {
+    std::ostream& s = w.section(kTagCache);
+    bin::write_vec(s, b.c);
+    bin::write_vec(s, b.J);
+    bin::write_vec(s, b.grasp);
+    bin::write_vec(s, b.approach);
+  }
   if (hri()) {
-    put(b.human.body.pose);
-    put(b.human.body.pose_rate);
-    put(b.human.body.cap);
-    put(b.human.body.cap_vel);
-    put(b.human.t);
-    put(b.human.Jx);
-    put(b.cup);
-    put(b.min_hd);
-    put(b.spilled);
+    std::ostream& s = w.section(kTagHuman);
+    bin::write_vec(s, b.human.t);
+    bin::write_vec(s, b.human.body.pose);
+    bin::write_vec(s, b.human.body.pose_rate);
+    bin::write_vec(s, b.human.body.cap);
+    bin::write_vec(s, b.human.body.cap_vel);
+    bin::write_vec(s, b.human.Jx);
+    bin::write_vec(s, b.human.final_cap);
+    bin::write_vec(s, b.cup);
+    bin::write_vec(s, b.min_hd);
+    bin::write_vec(s, b.spilled);
   }
-  put(buffers_.obs);
+  write_buffers_section(w, buffers_);
+  w.finish(out);
 }
 
 void ArmEnv::load_state(std::istream& in) {
-  ArmBatch& b = batch_;
-  int32_t N = 0;
-  in.read(reinterpret_cast<char*>(&N), sizeof N);
-  if (!in || N != num_envs())
-    throw std::runtime_error("arm env snapshot holds " + std::to_string(N) + " envs, this env has " +
-                             std::to_string(num_envs()));
-  in.read(reinterpret_cast<char*>(&b.seed), sizeof b.seed);
-  auto get = [&](auto& v) { in.read(reinterpret_cast<char*>(v.data()), sizeof(v[0]) * v.size()); };
-  get(b.q);
-  get(b.goal);
-  get(b.t);
-  get(b.ret);
-  get(b.fallback);
-  for (Rng& r : b.rng) {
-    Rng::State st;
-    in.read(reinterpret_cast<char*>(&st), sizeof st);
-    r.set_state(st);
+  SnapshotReader r(in, kTagArm, env_name(*model_));
+  read_head_section(r, num_envs(), fingerprint(config()));
+  ArmBatch b = batch_;  // same sizes; every array below is checked against them
+  auto get = [](std::istream& s, auto& v, const char* what) { bin::read_vec(s, v, what, int64_t(v.size())); };
+  {
+    std::istream& s = r.section(kTagState, "state");
+    b.seed = bin::read_pod<uint64_t>(s, "seed");
+    get(s, b.q, "q");
+    get(s, b.goal, "goal");
+    get(s, b.t, "t");
+    get(s, b.ret, "return");
+    get(s, b.fallback, "fallback");
+    for (Rng& x : b.rng) bin::read_rng(s, x, "rng");
   }
-  get(b.c);
-  get(b.J);
-  get(b.grasp);
-  get(b.approach);
+  {
+    std::istream& s = r.section(kTagCache, "cache");
+    get(s, b.c, "c");
+    get(s, b.J, "J");
+    get(s, b.grasp, "grasp");
+    get(s, b.approach, "approach");
+  }
   if (hri()) {
-    get(b.human.body.pose);
-    get(b.human.body.pose_rate);
-    get(b.human.body.cap);
-    get(b.human.body.cap_vel);
-    get(b.human.t);
-    get(b.human.Jx);
-    get(b.cup);
-    get(b.min_hd);
-    get(b.spilled);
+    std::istream& s = r.section(kTagHuman, "human");
+    get(s, b.human.t, "human.t");
+    get(s, b.human.body.pose, "human.pose");
+    get(s, b.human.body.pose_rate, "human.pose_rate");
+    get(s, b.human.body.cap, "human.cap");
+    get(s, b.human.body.cap_vel, "human.cap_vel");
+    get(s, b.human.Jx, "human.Jx");
+    get(s, b.human.final_cap, "human.final_cap");
+    get(s, b.cup, "cup");
+    get(s, b.min_hd, "min_human_distance");
+    get(s, b.spilled, "spilled");
   }
-  get(buffers_.obs);
-  if (!in) throw std::runtime_error("arm env snapshot is truncated");
+  EnvBuffers bufs = buffers_;
+  read_buffers_section(r, bufs);
+  r.finish();
+  batch_ = std::move(b);
+  buffers_ = std::move(bufs);
 }
 
 }  // namespace atacom
