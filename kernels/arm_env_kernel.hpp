@@ -5,7 +5,8 @@
 #pragma once
 #include <vector>
 
-#include "envs/arm/arm_env.hpp"
+#include "envs/arm/arm_rows.hpp"
+#include "envs/arm/tiago_model.hpp"
 #include "src/core/sdf.hpp"
 #include "kernels/arm_fk_lanes.hpp"
 #include "kernels/human_rows_lanes.hpp"

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <unistd.h>
 
+#include "src/core/binary_io.hpp"
 #include "train/checkpoint.hpp"
 
 namespace fs = std::filesystem;
@@ -62,6 +63,16 @@ TEST_CASE("checkpoint: truncated, corrupted or foreign files are rejected clearl
   version[8] = 99;
   dump(p, version);
   REQUIRE_THROWS_WITH(atacom::read_checkpoint(p), Catch::Contains("version 99"));
+  // A checkpoint of the previous format, intact (checksum recomputed): refused
+  // for its version, with what to do about it.
+  std::string old = good.substr(0, good.size() - 8);
+  old[8] = char(atacom::kCheckpointVersion - 1);
+  const uint64_t h = atacom::bin::fnv1a(old.data(), old.size());
+  old.append(reinterpret_cast<const char*>(&h), sizeof h);
+  dump(p, old);
+  REQUIRE_THROWS_WITH(atacom::read_checkpoint(p),
+                      Catch::Contains("format version " + std::to_string(atacom::kCheckpointVersion - 1)) &&
+                          Catch::Contains("older build") && Catch::Contains("start the run again"));
   dump(p, good + "extra");
   REQUIRE_THROWS_WITH(atacom::read_checkpoint(p), Catch::Contains("longer"));
   fs::remove(p);

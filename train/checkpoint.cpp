@@ -42,6 +42,9 @@ Checkpoint read_checkpoint(const std::string& path) {
   if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) throw std::runtime_error(bad + "not an atacom checkpoint");
   uint32_t version;
   std::memcpy(&version, bytes.data() + sizeof(kMagic), 4);
+  if (version < kCheckpointVersion)
+    throw std::runtime_error(bad + "format version " + std::to_string(version) + ", written by an older build; this build reads version " +
+                             std::to_string(kCheckpointVersion) + " only (resume with the build that wrote it, or start the run again)");
   if (version != kCheckpointVersion)
     throw std::runtime_error(bad + "format version " + std::to_string(version) + ", this build reads version " +
                              std::to_string(kCheckpointVersion));

@@ -17,7 +17,9 @@
 
 namespace atacom {
 
-constexpr uint32_t kCheckpointVersion = 3;  // 2: trainer counters gained train_violations; 3: learner payload, policy files
+// 2: trainer counters gained train_violations; 3: learner payload, policy
+// files; 4: the env section is the one env snapshot format (src/core/snapshot.hpp).
+constexpr uint32_t kCheckpointVersion = 4;
 
 struct Checkpoint {
   nlohmann::json manifest;

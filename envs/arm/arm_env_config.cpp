@@ -1,7 +1,7 @@
 // Config of the manipulation envs: the default factory per task, validation, JSON.
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
-#include "envs/arm/arm_env.hpp"
+#include "envs/arm/arm_env_config.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -17,7 +17,7 @@
 // Seam for learned distance fields ("distance to a static scene object"):
 // the scene group's d and grad d come from one function,
 // lanes::arm_scene_distance_lanes (kernels/arm_env_kernel.hpp), and its
-// scalar twin arm_scene_distance_reference (envs/arm/arm_env_model.cpp).
+// scalar twin arm_scene_distance_reference (envs/arm/arm_reference.cpp).
 // A learned SDF replaces those two bodies (values and gradients per PoI, in
 // base_footprint); nothing else reads the scene's shapes for the rows (the
 // ground-truth check keeps the exact geometry).
@@ -43,21 +43,29 @@ inline constexpr int kArmMaxRows = kRowUpright + 1;                  // 44
 inline constexpr int kArmDynamicRows = kArmRows - kRowScene;         // q-dependent Jacobian rows of the static groups
 inline constexpr int kArmMaxDynamicRows = kArmMaxRows - kRowScene;   // 30
 
+// A group of rows. A moving group's rows also depend on an obstacle that
+// moves on its own (HRI: the human): the batch carries that obstacle's state
+// and velocity (ArmMovingObstacle, envs/arm/arm_batch.hpp), and the group
+// owns one uncontrollable state x of the projector (its obstacle's clock,
+// column `state` of J_x) for which it writes J_x = dc/dt and xdot = 1.
 struct ArmRowSpan {
   ArmRowKind kind;
   int begin = 0, count = 0;
+  bool moving = false;
+  int state = -1;  // moving: its column of J_x / index into xdot
 };
 
 // The rows an env composes; k, offsets and the dynamic-row count follow.
 struct ArmRowLayout {
   std::vector<ArmRowSpan> groups;
   int k = 0;
+  int p = 0;  // moving groups = uncontrollable states of the projector
 
   // The static groups, plus human and upright rows for the HRI task.
   static ArmRowLayout compose(bool hri) {
     ArmRowLayout l;
-    auto add = [&](ArmRowKind kind, int n) {
-      l.groups.push_back({kind, l.k, n});
+    auto add = [&](ArmRowKind kind, int n, bool moving = false) {
+      l.groups.push_back({kind, l.k, n, moving, moving ? l.p++ : -1});
       l.k += n;
     };
     add(ArmRowKind::Joint, 2 * kArmJoints);
@@ -65,7 +73,7 @@ struct ArmRowLayout {
     add(ArmRowKind::Body, kArmPoi);
     add(ArmRowKind::Ground, 2);
     if (hri) {
-      add(ArmRowKind::Human, kArmPoi);
+      add(ArmRowKind::Human, kArmPoi, /*moving=*/true);
       add(ArmRowKind::Upright, 1);
     }
     return l;
@@ -75,6 +83,7 @@ struct ArmRowLayout {
       if (g.kind == kind) return true;
     return false;
   }
+  int moving_groups() const { return p; }
   int dynamic_rows() const { return k - kRowScene; }  // rows whose J_q depends on q (all but the joint group)
 };
 

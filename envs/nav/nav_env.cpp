@@ -15,6 +15,7 @@
 
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
+#include "src/core/snapshot.hpp"
 
 namespace atacom {
 
@@ -61,27 +62,9 @@ double to_f(double x) { return static_cast<double>(static_cast<float>(x)); }
 
 double sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
 
-uint64_t fnv1a(const std::string& s) {
-  uint64_t h = 1469598103934665603ull;
-  for (unsigned char ch : s) { h ^= ch; h *= 1099511628211ull; }
-  return h;
-}
+constexpr uint32_t kTagNav = snapshot_tag("NAV ");
+constexpr uint32_t kTagNavState = snapshot_tag("NAVS");
 
-template <class T>
-void write_raw(std::ostream& out, const T* p, size_t n) {
-  out.write(reinterpret_cast<const char*>(p), static_cast<std::streamsize>(n * sizeof(T)));
-}
-template <class T>
-void read_raw(std::istream& in, T* p, size_t n) {
-  in.read(reinterpret_cast<char*>(p), static_cast<std::streamsize>(n * sizeof(T)));
-  if (!in) throw std::runtime_error("nav snapshot: truncated stream");
-}
-template <class T>
-void write_vec(std::ostream& out, const std::vector<T>& v) { write_raw(out, v.data(), v.size()); }
-template <class T>
-void read_vec(std::istream& in, std::vector<T>& v) { read_raw(in, v.data(), v.size()); }
-
-constexpr char kSnapshotMagic[8] = {'N', 'A', 'V', 'E', 'N', 'V', '0', '1'};
 
 }  // namespace
 
@@ -554,90 +537,54 @@ void NavEnv::constraint_model(ProjectorBatch& pb, int begin, int end) const {
 
 // ---------------------------------------------------------------- snapshots
 
+// Snapshot (src/core/snapshot.hpp): HEAD, NAVS (the batch and its
+// streams), BUFS; read into copies first so a refused stream leaves the env
+// untouched.
 void NavEnv::save_state(std::ostream& out) const {
   nlohmann::json j;
   to_json(j, cfg_);
-  const uint64_t fingerprint = fnv1a(j.dump());
-  const int32_t N = st_.N;
-  write_raw(out, kSnapshotMagic, 8);
-  write_raw(out, &fingerprint, 1);
-  write_raw(out, &N, 1);
-  write_vec(out, st_.tiago);
-  write_vec(out, st_.tiago_vel);
-  write_vec(out, st_.fetch);
-  write_vec(out, st_.fetch_vel);
-  write_vec(out, st_.fetch_cmd);
-  write_vec(out, st_.goal);
-  write_vec(out, st_.fetch_goal);
-  write_vec(out, st_.prev_action);
-  write_vec(out, st_.t);
-  write_vec(out, st_.ret);
-  for (const Rng& r : st_.rng) {
-    const Rng::State s = r.state();
-    write_raw(out, s.s, 4);
-    write_raw(out, &s.spare, 1);
-    write_raw(out, &s.has_spare, 1);
-  }
-  const EnvBuffers& b = buffers_;
-  write_vec(out, b.obs);
-  write_vec(out, b.final_obs);
-  write_vec(out, b.reward);
-  write_vec(out, b.cost);
-  write_vec(out, b.terminated);
-  write_vec(out, b.truncated);
-  write_vec(out, b.constraints);
-  write_vec(out, b.info);
-  write_vec(out, b.episode_return);
-  write_vec(out, b.episode_length);
-  if (!out) throw std::runtime_error("nav snapshot: write failed");
+  SnapshotWriter w(kTagNav, "nav");
+  write_head_section(w, st_.N, snapshot_fingerprint(j.dump()));
+  std::ostream& s = w.section(kTagNavState);
+  bin::write_vec(s, st_.tiago);
+  bin::write_vec(s, st_.tiago_vel);
+  bin::write_vec(s, st_.fetch);
+  bin::write_vec(s, st_.fetch_vel);
+  bin::write_vec(s, st_.fetch_cmd);
+  bin::write_vec(s, st_.goal);
+  bin::write_vec(s, st_.fetch_goal);
+  bin::write_vec(s, st_.prev_action);
+  bin::write_vec(s, st_.t);
+  bin::write_vec(s, st_.ret);
+  for (const Rng& r : st_.rng) bin::write_rng(s, r);
+  write_buffers_section(w, buffers_);
+  w.finish(out);
 }
 
 void NavEnv::load_state(std::istream& in) {
-  char magic[8];
-  read_raw(in, magic, 8);
-  if (std::memcmp(magic, kSnapshotMagic, 8) != 0) throw std::runtime_error("nav snapshot: not a NavEnv snapshot");
   nlohmann::json j;
   to_json(j, cfg_);
-  uint64_t fingerprint = 0;
-  int32_t N = 0;
-  read_raw(in, &fingerprint, 1);
-  read_raw(in, &N, 1);
-  if (fingerprint != fnv1a(j.dump()))
-    throw std::runtime_error("nav snapshot: saved with a different nav config");
-  if (N != st_.N)
-    throw std::runtime_error("nav snapshot: holds " + std::to_string(N) + " envs, this env has " +
-                             std::to_string(st_.N));
-  // Read into a copy first so a truncated stream leaves the env untouched.
+  SnapshotReader r(in, kTagNav, "nav");
+  const int N = st_.N;
+  read_head_section(r, N, snapshot_fingerprint(j.dump()));
   NavBatch s;
   s.resize(N);
-  read_vec(in, s.tiago);
-  read_vec(in, s.tiago_vel);
-  read_vec(in, s.fetch);
-  read_vec(in, s.fetch_vel);
-  read_vec(in, s.fetch_cmd);
-  read_vec(in, s.goal);
-  read_vec(in, s.fetch_goal);
-  read_vec(in, s.prev_action);
-  read_vec(in, s.t);
-  read_vec(in, s.ret);
-  for (Rng& r : s.rng) {
-    Rng::State rs{};
-    read_raw(in, rs.s, 4);
-    read_raw(in, &rs.spare, 1);
-    read_raw(in, &rs.has_spare, 1);
-    r.set_state(rs);
-  }
+  std::istream& sec = r.section(kTagNavState, "state");
+  auto get = [&](auto& v, const char* what) { bin::read_vec(sec, v, what, int64_t(v.size())); };
+  get(s.tiago, "tiago");
+  get(s.tiago_vel, "tiago_vel");
+  get(s.fetch, "fetch");
+  get(s.fetch_vel, "fetch_vel");
+  get(s.fetch_cmd, "fetch_cmd");
+  get(s.goal, "goal");
+  get(s.fetch_goal, "fetch_goal");
+  get(s.prev_action, "prev_action");
+  get(s.t, "t");
+  get(s.ret, "return");
+  for (Rng& x : s.rng) bin::read_rng(sec, x, "rng");
   EnvBuffers b = buffers_;
-  read_vec(in, b.obs);
-  read_vec(in, b.final_obs);
-  read_vec(in, b.reward);
-  read_vec(in, b.cost);
-  read_vec(in, b.terminated);
-  read_vec(in, b.truncated);
-  read_vec(in, b.constraints);
-  read_vec(in, b.info);
-  read_vec(in, b.episode_return);
-  read_vec(in, b.episode_length);
+  read_buffers_section(r, b);
+  r.finish();
   st_ = std::move(s);
   buffers_ = std::move(b);
   // Rebuild every world from the SoA: the bodies' poses and velocities are the

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/binary_io.hpp"
+#include "src/core/snapshot.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
 #include "atacom/parallel.hpp"
@@ -16,7 +17,8 @@ namespace atacom {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-constexpr uint32_t kTagPendulum = 0x50454e44;  // "PEND"
+constexpr uint32_t kTagPendulum = snapshot_tag("PEND");
+constexpr uint32_t kTagPendulumState = snapshot_tag("PSTA");
 constexpr int kInfoAbsTheta = 0, kInfoNonfinite = 1;
 }  // namespace
 
@@ -147,45 +149,47 @@ void PendulumEnv::step(const double* actions) {
   });
 }
 
+// Snapshot (src/core/snapshot.hpp): HEAD, PEND (state and streams), BUFS;
+// read into copies, swapped in at the end.
 void PendulumEnv::save_state(std::ostream& out) const {
-  const EnvBuffers& b = buffers_;
-  bin::write_tag(out, kTagPendulum);
-  bin::write_pod<int32_t>(out, num_envs());
-  bin::write_vec(out, theta_);
-  bin::write_vec(out, theta_dot_);
-  bin::write_vec(out, t_);
-  bin::write_vec(out, ret_);
-  for (const Rng& r : rng_) bin::write_rng(out, r);
-  bin::write_vec(out, b.obs);
-  bin::write_vec(out, b.final_obs);
-  bin::write_vec(out, b.reward);
-  bin::write_vec(out, b.terminated);
-  bin::write_vec(out, b.truncated);
-  bin::write_vec(out, b.info);
-  bin::write_vec(out, b.episode_return);
-  bin::write_vec(out, b.episode_length);
+  nlohmann::json j;
+  to_json(j, model_);
+  SnapshotWriter w(kTagPendulum, "pendulum");
+  write_head_section(w, num_envs(), snapshot_fingerprint(j.dump()));
+  std::ostream& s = w.section(kTagPendulumState);
+  bin::write_vec(s, theta_);
+  bin::write_vec(s, theta_dot_);
+  bin::write_vec(s, t_);
+  bin::write_vec(s, ret_);
+  for (const Rng& r : rng_) bin::write_rng(s, r);
+  write_buffers_section(w, buffers_);
+  w.finish(out);
 }
 
 void PendulumEnv::load_state(std::istream& in) {
-  EnvBuffers& b = buffers_;
-  bin::expect_tag(in, kTagPendulum, "pendulum");
-  const int32_t n = bin::read_pod<int32_t>(in, "pendulum.N");
-  if (n != num_envs())
-    throw std::runtime_error("pendulum snapshot holds " + std::to_string(n) + " envs, this batch has " +
-                             std::to_string(num_envs()));
-  bin::read_vec(in, theta_, "pendulum.theta", n);
-  bin::read_vec(in, theta_dot_, "pendulum.theta_dot", n);
-  bin::read_vec(in, t_, "pendulum.t", n);
-  bin::read_vec(in, ret_, "pendulum.return", n);
-  for (Rng& r : rng_) bin::read_rng(in, r, "pendulum.rng");
-  bin::read_vec(in, b.obs, "pendulum.obs", int64_t(n) * 3);
-  bin::read_vec(in, b.final_obs, "pendulum.final_obs", int64_t(n) * 3);
-  bin::read_vec(in, b.reward, "pendulum.reward", n);
-  bin::read_vec(in, b.terminated, "pendulum.terminated", n);
-  bin::read_vec(in, b.truncated, "pendulum.truncated", n);
-  bin::read_vec(in, b.info, "pendulum.info", int64_t(n) * int64_t(spec_.info_names.size()));
-  bin::read_vec(in, b.episode_return, "pendulum.episode_return", n);
-  bin::read_vec(in, b.episode_length, "pendulum.episode_length", n);
+  nlohmann::json j;
+  to_json(j, model_);
+  SnapshotReader r(in, kTagPendulum, "pendulum");
+  const int n = num_envs();
+  read_head_section(r, n, snapshot_fingerprint(j.dump()));
+  std::vector<double> theta, theta_dot, ret;
+  std::vector<int32_t> t;
+  std::vector<Rng> rng = rng_;
+  std::istream& s = r.section(kTagPendulumState, "state");
+  bin::read_vec(s, theta, "pendulum.theta", n);
+  bin::read_vec(s, theta_dot, "pendulum.theta_dot", n);
+  bin::read_vec(s, t, "pendulum.t", n);
+  bin::read_vec(s, ret, "pendulum.return", n);
+  for (Rng& x : rng) bin::read_rng(s, x, "pendulum.rng");
+  EnvBuffers b = buffers_;
+  read_buffers_section(r, b);
+  r.finish();
+  theta_ = std::move(theta);
+  theta_dot_ = std::move(theta_dot);
+  t_ = std::move(t);
+  ret_ = std::move(ret);
+  rng_ = std::move(rng);
+  buffers_ = std::move(b);
 }
 
 EnvEntry pendulum_env_entry() {

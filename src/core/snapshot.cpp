@@ -1,0 +1,196 @@
+#include "src/core/snapshot.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+namespace atacom {
+
+std::string snapshot_tag_name(uint32_t tag) {
+  std::string s;
+  for (int i = 0; i < 4; ++i) {
+    const char c = static_cast<char>((tag >> (8 * i)) & 0xff);
+    if (c < 0x20 || c > 0x7e) {
+      char hex[16];
+      std::snprintf(hex, sizeof hex, "0x%08x", tag);
+      return hex;
+    }
+    s += c;
+  }
+  return "'" + s + "'";
+}
+
+SnapshotWriter::SnapshotWriter(uint32_t env_tag, std::string env_name)
+    : env_tag_(env_tag), env_name_(std::move(env_name)) {}
+
+std::ostream& SnapshotWriter::section(uint32_t tag) {
+  close_section();
+  cur_.str(std::string());
+  cur_.clear();
+  cur_tag_ = tag;
+  open_ = true;
+  return cur_;
+}
+
+void SnapshotWriter::close_section() {
+  if (!open_) return;
+  const std::string bytes = cur_.str();
+  std::ostringstream head;
+  bin::write_tag(head, cur_tag_);
+  bin::write_pod<uint64_t>(head, bytes.size());
+  body_ += head.str();
+  body_ += bytes;
+  open_ = false;
+}
+
+void SnapshotWriter::finish(std::ostream& out) {
+  close_section();
+  std::ostringstream head;
+  bin::write_tag(head, kSnapshotMagic);
+  bin::write_tag(head, env_tag_);
+  bin::write_pod<uint32_t>(head, kSnapshotVersion);
+  bin::write_pod<uint64_t>(head, body_.size());
+  const std::string h = head.str();
+  const uint64_t sum = bin::fnv1a(body_.data(), body_.size(), bin::fnv1a(h.data(), h.size()));
+  out.write(h.data(), std::streamsize(h.size()));
+  out.write(body_.data(), std::streamsize(body_.size()));
+  bin::write_pod(out, sum);
+  if (!out) throw std::runtime_error(env_name_ + " snapshot: write failed");
+}
+
+SnapshotReader::SnapshotReader(std::istream& in, uint32_t env_tag, std::string env_name)
+    : prefix_(std::move(env_name) + " snapshot: ") {
+  auto fail = [&](const std::string& why) { throw std::runtime_error(prefix_ + why); };
+  std::string what;
+  auto pod = [&](auto v, const char* field) {
+    try {
+      return bin::read_pod<decltype(v)>(in, field);
+    } catch (const std::runtime_error&) {
+      fail(std::string("truncated (header field ") + field + ")");
+    }
+    return v;
+  };
+  const uint32_t magic = pod(uint32_t{}, "magic");
+  if (magic != kSnapshotMagic) fail("not an env snapshot (magic " + snapshot_tag_name(magic) + ")");
+  const uint32_t tag = pod(uint32_t{}, "env");
+  if (tag != env_tag)
+    fail("holds env " + snapshot_tag_name(tag) + ", this env is " + snapshot_tag_name(env_tag));
+  const uint32_t version = pod(uint32_t{}, "version");
+  if (version != kSnapshotVersion)
+    fail("format version " + std::to_string(version) + ", this build reads version " +
+         std::to_string(kSnapshotVersion));
+  const uint64_t n = pod(uint64_t{}, "length");
+  // Read in bounded steps: a length the input does not back ends in
+  // "truncated", never in a huge allocation.
+  constexpr size_t kStep = size_t{16} << 20;
+  while (body_.size() < n) {
+    const size_t old = body_.size(), take = std::min<uint64_t>(kStep, n - old);
+    body_.resize(old + take);
+    in.read(body_.data() + old, std::streamsize(take));
+    if (in.gcount() != std::streamsize(take))
+      fail("truncated (" + std::to_string(old + size_t(in.gcount())) + " of " + std::to_string(n) + " body bytes)");
+  }
+  uint64_t stored = 0;
+  in.read(reinterpret_cast<char*>(&stored), sizeof stored);
+  if (in.gcount() != std::streamsize(sizeof stored)) fail("truncated (checksum missing)");
+  std::ostringstream head;
+  bin::write_tag(head, magic);
+  bin::write_tag(head, tag);
+  bin::write_pod(head, version);
+  bin::write_pod(head, n);
+  const std::string h = head.str();
+  if (bin::fnv1a(body_.data(), body_.size(), bin::fnv1a(h.data(), h.size())) != stored)
+    fail("corrupt (checksum mismatch)");
+}
+
+void SnapshotReader::close_section() {
+  if (!open_) return;
+  open_ = false;
+  const auto used = cur_.tellg();
+  if (used < 0 || size_t(used) != cur_size_ || cur_.peek() != std::char_traits<char>::eof())
+    throw std::runtime_error(prefix_ + "section " + cur_what_ + " has " + std::to_string(cur_size_) +
+                             " bytes, this build reads " + std::to_string(used < 0 ? 0 : size_t(used)) +
+                             " of them (a different layout)");
+}
+
+std::istream& SnapshotReader::section(uint32_t tag, const char* what) {
+  close_section();
+  if (body_.size() - pos_ < 12) throw std::runtime_error(prefix_ + "section " + what + " is missing");
+  uint32_t t;
+  uint64_t n;
+  std::memcpy(&t, body_.data() + pos_, 4);
+  std::memcpy(&n, body_.data() + pos_ + 4, 8);
+  pos_ += 12;
+  if (t != tag)
+    throw std::runtime_error(prefix_ + "expected section " + what + " (" + snapshot_tag_name(tag) + "), found " +
+                             snapshot_tag_name(t));
+  if (n > body_.size() - pos_) throw std::runtime_error(prefix_ + "section " + what + " runs past the snapshot's end");
+  cur_.str(body_.substr(pos_, n));
+  cur_.clear();
+  pos_ += n;
+  cur_what_ = what;
+  cur_size_ = n;
+  open_ = true;
+  return cur_;
+}
+
+void SnapshotReader::finish() {
+  close_section();
+  if (pos_ != body_.size()) throw std::runtime_error(prefix_ + "holds sections this build does not read");
+}
+
+namespace {
+constexpr uint32_t kTagHead = snapshot_tag("HEAD");
+constexpr uint32_t kTagBuffers = snapshot_tag("BUFS");
+}  // namespace
+
+uint64_t snapshot_fingerprint(const std::string& config_json) {
+  return bin::fnv1a(config_json.data(), config_json.size());
+}
+
+void write_head_section(SnapshotWriter& w, int num_envs, uint64_t config_fingerprint) {
+  std::ostream& s = w.section(kTagHead);
+  bin::write_pod<int32_t>(s, num_envs);
+  bin::write_pod<uint64_t>(s, config_fingerprint);
+}
+
+void read_head_section(SnapshotReader& r, int num_envs, uint64_t config_fingerprint) {
+  std::istream& s = r.section(kTagHead, "head");
+  const int32_t n = bin::read_pod<int32_t>(s, "env count");
+  const uint64_t f = bin::read_pod<uint64_t>(s, "config fingerprint");
+  if (n != num_envs)
+    throw std::runtime_error(r.prefix() + "holds " + std::to_string(n) + " envs, this env has " +
+                             std::to_string(num_envs));
+  if (f != config_fingerprint) throw std::runtime_error(r.prefix() + "saved with a different env config");
+}
+
+void write_buffers_section(SnapshotWriter& w, const EnvBuffers& b) {
+  std::ostream& s = w.section(kTagBuffers);
+  bin::write_vec(s, b.obs);
+  bin::write_vec(s, b.final_obs);
+  bin::write_vec(s, b.reward);
+  bin::write_vec(s, b.cost);
+  bin::write_vec(s, b.terminated);
+  bin::write_vec(s, b.truncated);
+  bin::write_vec(s, b.constraints);
+  bin::write_vec(s, b.info);
+  bin::write_vec(s, b.episode_return);
+  bin::write_vec(s, b.episode_length);
+}
+
+void read_buffers_section(SnapshotReader& r, EnvBuffers& b) {
+  std::istream& s = r.section(kTagBuffers, "buffers");
+  auto get = [&](auto& v, const char* what) { bin::read_vec(s, v, what, int64_t(v.size())); };
+  get(b.obs, "buffers.obs");
+  get(b.final_obs, "buffers.final_obs");
+  get(b.reward, "buffers.reward");
+  get(b.cost, "buffers.cost");
+  get(b.terminated, "buffers.terminated");
+  get(b.truncated, "buffers.truncated");
+  get(b.constraints, "buffers.constraints");
+  get(b.info, "buffers.info");
+  get(b.episode_return, "buffers.episode_return");
+  get(b.episode_length, "buffers.episode_length");
+}
+
+}  // namespace atacom
