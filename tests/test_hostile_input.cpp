@@ -213,7 +213,7 @@ TEST_CASE("hostile flags: every integer flag is range-checked with its name and 
 
 TEST_CASE("hostile output: a failed write or flush on stdout is an error exit", "[hostile]") {
   if (!fs::exists("/dev/full")) return;  // not Linux: nothing to write to
-  for (const std::string args : std::vector<std::string>{"filter", "rollout --env nav --policy zero --steps 10 --envs 2",
+  for (const std::string& args : std::vector<std::string>{"filter", "rollout --env nav --policy zero --steps 10 --envs 2",
                                                         "--help", "rollout --help"}) {
     const Result r = atacom_cli(args, kValid + "\n", true, "/dev/full");
     INFO(args << " -> " << r.out);

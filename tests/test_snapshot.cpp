@@ -137,7 +137,11 @@ TEST_CASE("snapshot format: every env restores bitwise and refuses others' snaps
     auto other = make_env({.name = c.name, .num_envs = c.N});
     other->seed(99);
     std::istringstream in(at);
+    const float* obs_storage = other->buffers().obs.data();  // views (numpy, the trainer) hold these pointers
+    const double* c_storage = other->buffers().constraints.data();
     other->load_state(in);
+    CHECK(other->buffers().obs.data() == obs_storage);
+    CHECK(other->buffers().constraints.data() == c_storage);
     REQUIRE(snapshot(*other) == at);
     rng = rng_at;
     drive(*other, rng, 60);

@@ -103,7 +103,7 @@ void ArmEnv::load_state(std::istream& in) {
   read_buffers_section(r, bufs);
   r.finish();
   batch_ = std::move(b);
-  buffers_ = std::move(bufs);
+  buffers_.copy_values_from(bufs);
 }
 
 }  // namespace atacom

@@ -586,7 +586,7 @@ void NavEnv::load_state(std::istream& in) {
   read_buffers_section(r, b);
   r.finish();
   st_ = std::move(s);
-  buffers_ = std::move(b);
+  buffers_.copy_values_from(b);
   // Rebuild every world from the SoA: the bodies' poses and velocities are the
   // only Box2D state a step depends on (no touching contact survives a step,
   // warm starting and sleeping are off).

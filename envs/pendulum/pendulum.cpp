@@ -189,7 +189,7 @@ void PendulumEnv::load_state(std::istream& in) {
   t_ = std::move(t);
   ret_ = std::move(ret);
   rng_ = std::move(rng);
-  buffers_ = std::move(b);
+  buffers_.copy_values_from(b);
 }
 
 EnvEntry pendulum_env_entry() {

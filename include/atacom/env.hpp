@@ -53,6 +53,10 @@ struct EnvBuffers {
   std::vector<int32_t> episode_length;// (N) length of the episode that just ended
 
   void resize(const EnvSpec& spec, int N);
+  // Copies every array's values from `from` (same shapes) into this one's
+  // storage: views on these arrays (the Python module's, the trainer's)
+  // stay valid across load_state, which a move or swap would break.
+  void copy_values_from(const EnvBuffers& from);
   bool done(int i) const { return terminated[i] || truncated[i]; }
 };
 
