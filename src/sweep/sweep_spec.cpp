@@ -25,7 +25,7 @@ std::vector<std::string> name_list(ConfigReader& r, const char* key) {
   for (const auto& e : x) {
     if (!e.is_string() || e.get<std::string>().empty()) throw std::invalid_argument(what + " must hold non-empty strings");
     if (!seen.insert(e.get<std::string>()).second)
-      throw std::invalid_argument(what + " lists '" + e.get<std::string>() + "' twice");
+      throw std::invalid_argument(what + " lists '" + printable_text(e.get<std::string>()) + "' twice");
     out.push_back(e.get<std::string>());
   }
   return out;
@@ -78,14 +78,14 @@ SweepSpec parse_sweep_spec(const nlohmann::json& j) {
     for (auto it = o->begin(); it != o->end(); ++it) {
       const std::string& k = it.key();
       const size_t slash = k.find('/');
-      const std::string what = "sweep spec key 'overrides." + k + "'";
+      const std::string what = "sweep spec key 'overrides." + printable_text(k) + "'";
       if (slash == std::string::npos || k.find('/', slash + 1) != std::string::npos)
         throw std::invalid_argument(what + ": the key must be '<env>/<algo>' (either part may be '*')");
       const std::string env = k.substr(0, slash), algo = k.substr(slash + 1);
       if (env != "*" && !listed(s.envs, env))
-        throw std::invalid_argument(what + ": env '" + env + "' is not in 'envs'");
+        throw std::invalid_argument(what + ": env '" + printable_text(env) + "' is not in 'envs'");
       if (algo != "*" && !listed(s.algos, algo))
-        throw std::invalid_argument(what + ": algo '" + algo + "' is not in 'algos'");
+        throw std::invalid_argument(what + ": algo '" + printable_text(algo) + "' is not in 'algos'");
       if (!it.value().is_object()) throw std::invalid_argument(what + " must be a JSON object (a run config fragment)");
       if (const auto t = it.value().find("train"); t != it.value().end() && t->is_object())
         for (const char* fixed : {"env", "algo", "seed", "steps", "num_envs"})
