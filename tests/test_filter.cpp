@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/safety/filter.hpp"
+#include "tests/shell_run.hpp"
 
 using nlohmann::json;
 
@@ -87,13 +88,8 @@ TEST_CASE("filter: the stream goes on after an error and counts failures", "[fil
 TEST_CASE("filter: the atacom executable streams and exits nonzero after a failure", "[filter]") {
   const std::string cmd = std::string("printf '%s\\n' '{\"f\":[0],\"G\":[[1]],\"J_q\":[[1]],\"c\":[-1],\"alpha\":[1]}' "
                                       "'oops' | ") + ATACOM_ATACOM_EXE + " filter 2>/dev/null";
-  FILE* p = popen(cmd.c_str(), "r");
-  REQUIRE(p != nullptr);
-  std::string out;
-  char buf[4096];
-  while (size_t n = fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-  const int status = pclose(p);
-  CHECK(WEXITSTATUS(status) == 1);
-  CHECK(out.find("\"a\"") != std::string::npos);
-  CHECK(out.find("\"error\"") != std::string::npos);
+  const ShellResult r = run_shell(cmd);
+  CHECK(r.rc == 1);
+  CHECK(r.out.find("\"a\"") != std::string::npos);
+  CHECK(r.out.find("\"error\"") != std::string::npos);
 }

@@ -19,16 +19,14 @@
 #include "atacom/trainer.hpp"
 #include "src/core/limits.hpp"
 #include "src/safety/filter.hpp"
+#include "tests/shell_run.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
 
-struct Result {
-  int rc = -1;
-  std::string out;  // stdout (and stderr when merged)
-};
+using Result = ShellResult;  // out: stdout (and stderr when merged)
 
 // Runs `atacom <args>` through the shell; `stdin_text` is fed from a file.
 // `stdout_to` other than "" sends stdout there and reads stderr instead.
@@ -38,13 +36,7 @@ Result atacom_cli(const std::string& args, const std::string& stdin_text = "", b
   std::ofstream(in, std::ios::binary) << stdin_text;
   const std::string cmd = std::string(ATACOM_ATACOM_EXE) + " " + args + " < " + in.string() +
                           (!stdout_to.empty() ? " 2>&1 >" + stdout_to : merge_stderr ? " 2>&1" : " 2>/dev/null");
-  Result r;
-  FILE* p = popen(cmd.c_str(), "r");
-  REQUIRE(p != nullptr);
-  char buf[4096];
-  while (size_t n = fread(buf, 1, sizeof(buf), p)) r.out.append(buf, n);
-  const int status = pclose(p);
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const Result r = run_shell(cmd);
   fs::remove(in);
   return r;
 }

@@ -13,24 +13,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/shell_run.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
-struct Result {
-  int rc = -1;
-  std::string out;
-};
-Result atacom_cli(const std::string& args) {
-  const std::string cmd = std::string(ATACOM_ATACOM_EXE) + " " + args + " 2>&1";
-  Result r;
-  FILE* p = popen(cmd.c_str(), "r");
-  REQUIRE(p != nullptr);
-  char buf[4096];
-  while (size_t n = fread(buf, 1, sizeof(buf), p)) r.out.append(buf, n);
-  const int status = pclose(p);
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = ShellResult;
+Result atacom_cli(const std::string& args) { return run_shell(std::string(ATACOM_ATACOM_EXE) + " " + args + " 2>&1"); }
 }  // namespace
 
 TEST_CASE("sdf cli: --sdf learned runs hri with the learned human, and is refused with --policy trained, --resume, nav", "[redsdf][cli]") {

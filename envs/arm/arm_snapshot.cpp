@@ -68,7 +68,7 @@ void ArmEnv::load_state(std::istream& in) {
   SnapshotReader r(in, kTagArm, env_name(*model_));
   read_head_section(r, num_envs(), fingerprint(config()));
   ArmBatch b = batch_;  // same sizes; every array below is checked against them
-  auto get = [](std::istream& s, auto& v, const char* what) { bin::read_vec(s, v, what, int64_t(v.size())); };
+  auto get = [](std::istream& s, auto& v, const char* what) { bin::read_vec_sized(s, v, what); };
   {
     std::istream& s = r.section(kTagState, "state");
     b.seed = bin::read_pod<uint64_t>(s, "seed");

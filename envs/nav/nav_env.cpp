@@ -570,7 +570,7 @@ void NavEnv::load_state(std::istream& in) {
   NavBatch s;
   s.resize(N);
   std::istream& sec = r.section(kTagNavState, "state");
-  auto get = [&](auto& v, const char* what) { bin::read_vec(sec, v, what, int64_t(v.size())); };
+  auto get = [&](auto& v, const char* what) { bin::read_vec_sized(sec, v, what); };
   get(s.tiago, "tiago");
   get(s.tiago_vel, "tiago_vel");
   get(s.fetch, "fetch");

@@ -65,6 +65,13 @@ void read_vec(std::istream& in, std::vector<T, Alloc>& v, const char* what, int6
   }
 }
 
+// Reads a vector into `v`, which already has the size the snapshot must hold
+// (a batch array sized for this env): a count that differs is refused.
+template <class T, class Alloc>
+void read_vec_sized(std::istream& in, std::vector<T, Alloc>& v, const char* what) {
+  read_vec(in, v, what, static_cast<int64_t>(v.size()));
+}
+
 // Section tags make a misaligned read fail at the first wrong section.
 inline void write_tag(std::ostream& out, uint32_t tag) { write_pod(out, tag); }
 inline void expect_tag(std::istream& in, uint32_t tag, const char* what) {

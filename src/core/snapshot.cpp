@@ -180,7 +180,7 @@ void write_buffers_section(SnapshotWriter& w, const EnvBuffers& b) {
 
 void read_buffers_section(SnapshotReader& r, EnvBuffers& b) {
   std::istream& s = r.section(kTagBuffers, "buffers");
-  auto get = [&](auto& v, const char* what) { bin::read_vec(s, v, what, int64_t(v.size())); };
+  auto get = [&](auto& v, const char* what) { bin::read_vec_sized(s, v, what); };
   get(b.obs, "buffers.obs");
   get(b.final_obs, "buffers.final_obs");
   get(b.reward, "buffers.reward");
