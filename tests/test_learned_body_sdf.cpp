@@ -15,6 +15,7 @@
 #include "envs/arm/arm_learned_sdf.hpp"
 #include "kernels/redsdf_lanes.hpp"
 #include "src/core/data_dir.hpp"
+#include "train/sdf_path_accuracy.hpp"
 #include "train/sdf_tiago_data.hpp"
 
 using namespace atacom;
@@ -234,4 +235,28 @@ TEST_CASE("bad learned body settings fail at construction with the key or file n
   // The flag switches the body with the env's own field on every arm env.
   CHECK(sdf_flag_override("shelf", "learned") == nlohmann::json{{"sdf", {{"shelf", "learned"}, {"tiago", "learned"}}}});
   CHECK(sdf_flag_override("hri", "analytic") == nlohmann::json{{"sdf", {{"human", "analytic"}, {"tiago", "analytic"}}}});
+}
+
+TEST_CASE("sdf-paths on the body field: every point counted, the band's over-estimate within the body margin", "[redsdf][arm_env]") {
+  SdfPathConfig c;
+  c.env = "table";
+  c.field = "body";
+  c.steps = 2000;
+  c.envs = 16;
+  c.safety = "none";
+  const auto r = sdf_path_accuracy(c);
+  CHECK(r["object"] == "tiago");
+  CHECK(r["field"] == "body");
+  const long points = r["points"];
+  CHECK(points > 0);
+  CHECK(points <= 2000L * kArmPoi);
+  CHECK(r["near"]["points"].get<long>() + r["mid"]["points"].get<long>() + r["far"]["points"].get<long>() == points);
+  const double margin = r["margin"];
+  CHECK(margin > 0.0);
+  // Some PoIs (the shoulder's) sit close to the torso: the near/mid bins are not empty.
+  CHECK(r["near"]["points"].get<long>() + r["mid"]["points"].get<long>() > 0);
+  CHECK(r["max_overestimate_band"].get<double>() < margin);
+  CHECK(r["clear_while_inside"].get<long>() == 0);
+  c.field = "elbow";
+  CHECK_THROWS_WITH(sdf_path_accuracy(c), Catch::Contains("field 'elbow'"));
 }

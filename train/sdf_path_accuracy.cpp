@@ -60,14 +60,21 @@ json sdf_path_accuracy(const SdfPathConfig& c) {
   auto* safe = dynamic_cast<SafeEnv*>(env.get());
   const auto* arm = dynamic_cast<const ArmEnv*>(safe ? &safe->inner() : env.get());
   if (!arm) throw std::logic_error("sdf path accuracy: not an arm env");
-  const bool hri = arm->hri();
+  if (c.field != "obstacle" && c.field != "body")
+    throw std::invalid_argument("sdf path accuracy: field '" + c.field + "', must be obstacle or body");
+  const bool body = c.field == "body";
+  const bool hri = arm->hri() && !body;  // the human's field (pose-conditioned, per env)
   std::shared_ptr<LearnedObstacle> obs;
   std::shared_ptr<LearnedHuman> hum;
   if (hri) hum = load_arm_learned_human(arm->config().sdf);
+  else if (body) obs = load_arm_learned_body(arm->config().sdf, arm->config().torso_lift);
   else obs = load_arm_learned_obstacle(arm->config().sdf, arm->config().scene);
+  if (!hum && !obs) throw std::logic_error("sdf path accuracy: no learned field for '" + c.field + "'");
   RedsdfBatch& net = hri ? *hum->batch : *obs->batch;
   const double margin = hri ? hum->margin : obs->margin;
-  const int N = c.envs, P = hri ? kHumanDofs : 0;
+  // The body's pose input (the torso lift) is the same for every point.
+  const int N = c.envs, P = hri ? kHumanDofs : int(obs->pose.size());
+  const ShapeUnion& analytic = body ? arm->scene().body : arm->scene().obstacle;
   std::vector<float> pts(size_t(N) * kArmPoi * 3), pose(size_t(N) * kArmPoi * P), d(size_t(N) * kArmPoi),
       g(size_t(N) * kArmPoi * 3);
   std::vector<double> da(size_t(N) * kArmPoi), dex(da.size()), ga(3 * da.size()), yaw(static_cast<size_t>(N));
@@ -107,12 +114,13 @@ json sdf_path_accuracy(const SdfPathConfig& c) {
           pts[3 * r] = float(cs * dx + sn * dy), pts[3 * r + 1] = float(-sn * dx + cs * dy), pts[3 * r + 2] = float(p.z() - x[2]);
           for (int k = 0; k < P; ++k) pose[r * size_t(P) + size_t(k)] = float(x[kHumanRootDofs + k]);
         } else {
-          da[r] = union_distance(arm->scene().obstacle, p, &gr);
-          ShapeUnion ex = arm->scene().obstacle;
+          da[r] = union_distance(analytic, p, &gr);
+          ShapeUnion ex = analytic;
           ex.blend = 0.0;
           dex[r] = union_distance_exact(ex, p);
           const Eigen::Vector3d po = obs->R.transpose() * (p - obs->t);
           for (int k = 0; k < 3; ++k) pts[3 * r + size_t(k)] = float(po(k));
+          for (int k = 0; k < P; ++k) pose[r * size_t(P) + size_t(k)] = obs->pose[size_t(k)];
         }
         for (int k = 0; k < 3; ++k) ga[3 * r + size_t(k)] = gr(k);
       }
@@ -142,7 +150,8 @@ json sdf_path_accuracy(const SdfPathConfig& c) {
     }
   }
   return {{"env", c.env},
-          {"object", hri ? "human" : c.env},
+          {"field", c.field},
+          {"object", hri ? "human" : body ? "tiago" : c.env},
           {"steps", iters * N},
           {"envs", N},
           {"seed", c.seed},

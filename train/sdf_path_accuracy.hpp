@@ -4,7 +4,9 @@
 // through ATACOM or raw (safety "none": paths that also reach the surface);
 // after every step, each PoI of every env that did not just end is
 // evaluated with the learned field and with the analytic one (the env's
-// smooth-union rows) and the exact distance. Figures: docs/sdf.md.
+// smooth-union rows) and the exact distance. The field is the env's object
+// or the robot body (its learned field conditioned on the env's torso lift).
+// Figures: docs/sdf.md.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -14,7 +16,8 @@
 namespace atacom {
 
 struct SdfPathConfig {
-  std::string env = "table";  // table | shelf | hri (the human)
+  std::string env = "table";  // table | shelf | hri
+  std::string field = "obstacle";  // obstacle (the env's object: table, shelf or hri's human) | body (the TIAGo body)
   long steps = 20000;         // env steps over all envs
   int envs = 64;
   uint64_t seed = 1;

@@ -1,5 +1,6 @@
 // atacom sdf-paths: accuracy of an env's learned distance field along the
-// arm's points of interest during random-alpha ATACOM rollouts (docs/sdf.md).
+// arm's points of interest during random-alpha rollouts, for the env's object
+// or the robot body (docs/sdf.md).
 #include <iostream>
 
 #include "cli/command.hpp"
@@ -11,9 +12,11 @@ atacom::cli::RegisterCommand reg(
     {"sdf-paths", "learned vs analytic distance and gradient along the arm's PoIs in ATACOM rollouts (one JSON line)",
      [](CLI::App& app) -> std::function<int()> {
        auto c = std::make_shared<atacom::SdfPathConfig>();
-       app.add_option("--env", c->env, "table | shelf | hri (the human)")
+       app.add_option("--env", c->env, "table | shelf | hri")
            ->required()
            ->check(CLI::IsMember({"table", "shelf", "hri"}));
+       app.add_option("--field", c->field, "obstacle (the env's object: table, shelf, hri's human) | body (the TIAGo body)")
+           ->check(CLI::IsMember({"obstacle", "body"}));
        app.add_option("--steps", c->steps, "env steps over all envs")->check(CLI::Range(1L, 100000000L));
        app.add_option("--envs", c->envs, "parallel envs")->check(CLI::Range(1, 65536));
        app.add_option("--seed", c->seed, "seed of the envs and the random alpha");
