@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "atacom/trainer.hpp"
 #include "src/experiments/render.hpp"
 
 using namespace atacom;
@@ -115,6 +116,57 @@ TEST_CASE("render: nav episode through ATACOM, top view with both robots, bad in
   c.env = "pendulum";
   c.safety = SafetyLayer::None;
   CHECK_THROWS_WITH(render_episode(c), Catch::Contains("no picture"));
+}
+
+TEST_CASE("render: the linear attractor and a trained run's policy act through the same contract", "[render]") {
+  RenderConfig c;
+  c.env = "nav";
+  c.policy = "la";
+  c.seed = 1;
+  const RenderResult nav = render_episode(c);
+  CHECK(nav.collisions == 0);
+  CHECK(nav.episode_return > 0.0);  // the attractor drives to the goal (zero and random do not)
+  c.policy = "zero";
+  CHECK(render_episode(c).episode_return < nav.episode_return);
+  c.env = "table";
+  c.policy = "la";
+  const RenderResult table = render_episode(c);
+  CHECK(table.collisions == 0);
+  CHECK(page_data(table.html)["policy"] == "la");
+  // A trained run brings its env, config and layer; settings that do not apply are refused.
+  const std::string dir = (std::filesystem::temp_directory_path() / ("atacom_test_render_run." + std::to_string(::getpid()))).string();
+  std::filesystem::remove_all(dir);
+  const json run = {{"sac", {{"actor", {{"hidden", {16, 16}}}}, {"critic", {{"hidden", {16, 16}}}}, {"batch_size", 16},
+                             {"initial_replay", 100}, {"warmup", 100}, {"replay_capacity", 2000}}},
+                    {"train", {{"env", "nav"}, {"algo", "atacom-sac"}, {"steps", 300}, {"eval_every", 300},
+                               {"eval_episodes", 1}, {"seed", 1}}}};
+  TrainOptions o;
+  o.out_dir = dir;
+  run_training(resolve_run_config(run), o);
+  RenderConfig t;
+  t.policy = "trained";
+  t.run_dir = dir;
+  t.seed = 2;
+  const RenderResult r = render_episode(t);
+  const json d = page_data(r.html);
+  CHECK(d["env"] == "nav");
+  CHECK(d["safety"] == "atacom");
+  CHECK(d["frames"].size() == static_cast<size_t>(r.steps));
+  t.which = RunPolicy::Best;
+  CHECK(render_episode(t).steps > 0);
+  t.env = "table";
+  CHECK_THROWS_WITH(render_episode(t), Catch::Contains("differs"));
+  t.env.clear();
+  t.env_config = {{"velocity_scale", 0.5}};
+  CHECK_THROWS_WITH(render_episode(t), Catch::Contains("do not apply"));
+  RenderConfig bad;
+  bad.env = "nav";
+  bad.run_dir = dir;
+  CHECK_THROWS_WITH(render_episode(bad), Catch::Contains("--run applies to --policy trained only"));
+  bad.run_dir.clear();
+  bad.policy = "trained";
+  CHECK_THROWS_WITH(render_episode(bad), Catch::Contains("needs --run"));
+  std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("render: the CLI writes the page and prints its summary", "[render]") {

@@ -8,6 +8,7 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/policy.hpp"
+#include "train/policy_source.hpp"
 #include "atacom/rng.hpp"
 #include "src/core/limits.hpp"
 #include "src/core/value_range.hpp"
@@ -22,38 +23,20 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   if (!range::closed<long>(1, limits::kMaxSteps).contains(cfg.steps))
     throw std::invalid_argument("--steps is " + std::to_string(cfg.steps) + ", must be " +
                                 range::closed<long>(1, limits::kMaxSteps).describe());
-  const bool trained = cfg.policy == "trained";
-  if (!trained && !cfg.run_dir.empty())
-    throw std::invalid_argument("--run applies to --policy trained only (the policy is '" + cfg.policy + "')");
-  std::string env_name = cfg.env;
-  nlohmann::json env_config = cfg.env_config;
-  SafetyLayer safety = cfg.safety.value_or(SafetyLayer::Atacom);
-  std::unique_ptr<TrainedPolicy> tp;
-  if (trained) {
-    if (cfg.run_dir.empty()) throw std::invalid_argument("--policy trained needs --run DIR (a training run directory)");
-    tp = TrainedPolicy::load(cfg.run_dir, cfg.which);
-    const TrainConfig& t = tp->config().train;
-    if (!env_name.empty() && env_name != t.env)
-      throw std::invalid_argument("--env " + env_name + " differs from the env of run '" + cfg.run_dir + "' (" + t.env + ")");
-    if (!env_config.is_null() && !(env_config.is_object() && env_config.empty()))
-      throw std::invalid_argument("env config overrides do not apply to --policy trained: the run's env config is used");
-    env_name = t.env;
-    env_config = tp->config().env;
-    safety = cfg.safety.value_or(tp->safety());
-  }
-  if (env_name.empty()) throw std::invalid_argument("rollout needs an env name (--env)");
-  auto env = make_env(EnvRequest{env_name, cfg.envs, safety, env_config});
+  PolicyRequest req;
+  req.policy = cfg.policy;
+  req.env = cfg.env;
+  req.run_dir = cfg.run_dir;
+  req.which = cfg.which;
+  req.safety = cfg.safety;
+  req.env_config = cfg.env_config;
+  PolicySource src = resolve_policy_source(req);
+  const std::string& env_name = src.env;
+  const SafetyLayer safety = src.safety;
+  auto env = make_env(EnvRequest{env_name, cfg.envs, safety, src.env_config});
   const EnvSpec& spec = env->spec();
   const int N = cfg.envs, m = spec.act_dim, k = spec.num_constraints;
-  std::unique_ptr<Policy> own;
-  Policy* policy = tp.get();
-  if (cfg.policy == "random") own = make_random_policy(spec.obs_dim, m);
-  else if (cfg.policy == "zero") own = make_zero_policy(spec.obs_dim, m);
-  else if (cfg.policy == "la") own = make_attractor_policy(env_name, resolve_env_config(env_name, env_config));
-  else if (!trained) throw std::invalid_argument("unknown policy '" + printable_text(cfg.policy) + "' (random, zero, la, trained)");
-  if (own) policy = own.get();
-  if (policy->obs_dim() != spec.obs_dim || policy->act_dim() != m)
-    throw std::invalid_argument("the policy's obs/act dims do not fit env '" + env_name + "'");
+  Policy* policy = &src.bind(spec);
   env->seed(cfg.seed);
 
   // Per-env action streams, distinct from the env's own streams.
@@ -122,7 +105,7 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
     const std::string& name = spec.info_names[collision_cols[c]];
     out[name + "s"] = static_cast<long>(std::llround(collision_sums[c]));
   }
-  if (tp) {
+  if (const TrainedPolicy* tp = src.trained.get()) {
     out["run"] = cfg.run_dir;
     out["run_algo"] = tp->config().train.algo;
     out["run_safety"] = safety_layer_name(tp->safety());

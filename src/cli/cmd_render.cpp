@@ -13,21 +13,32 @@ namespace {
 
 struct RenderArgs {
   RenderConfig cfg;
-  std::string safety = "atacom", out, config_file;
+  std::string safety, out, config_file, which = "final";
 };
 
 const RegisterCommand reg{
     {"render", "draw one episode as a self-contained HTML page (animated SVG, slider, constraint and reward plots)",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<RenderArgs>();
-       app.add_option("--env", a->cfg.env, "table | shelf | nav | hri")->required();
-       app.add_option("--policy", a->cfg.policy, "random | zero")->check(CLI::IsMember({"random", "zero"}));
-       app.add_option("--safety", a->safety, "atacom | none | safelayer: the layer between policy and env");
+       app.add_option("--env", a->cfg.env, "table | shelf | nav | hri (required unless --policy trained)");
+       app.add_option("--policy", a->cfg.policy, "random | zero | la (the env's linear attractor) | trained (with --run)")
+           ->check(CLI::IsMember({"random", "zero", "la", "trained"}));
+       app.add_option("--run", a->cfg.run_dir, "training run directory (--policy trained)");
+       app.add_option("--which", a->which, "final | best: the run's policy file (--policy trained)")
+           ->check(CLI::IsMember({"final", "best"}));
+       app.add_option("--safety", a->safety,
+                      "atacom | none | safelayer: the layer between policy and env (default atacom; with --policy "
+                      "trained the run's)");
        add_integer_flag(app, "--seed", a->cfg.seed, seed_range<decltype(a->cfg.seed)>(), "seed of the env and the policy");
        app.add_option("--config", a->config_file, "JSON file with env config overrides");
        app.add_option("--out", a->out, "the HTML file to write")->required();
        return [a] {
-         a->cfg.safety = parse_safety_layer(a->safety);
+         if (!a->safety.empty()) a->cfg.safety = parse_safety_layer(a->safety);
+         if (a->which != "final" && a->cfg.policy != "trained")
+           throw std::invalid_argument("--which applies to --policy trained only");
+         a->cfg.which = a->which == "best" ? RunPolicy::Best : RunPolicy::Final;
+         if (a->cfg.env.empty() && a->cfg.policy != "trained")
+           throw std::invalid_argument("--env is required (unless --policy trained)");
          if (!a->config_file.empty()) {
            std::ifstream in(a->config_file);
            if (!in) throw std::runtime_error("cannot read config file '" + a->config_file + "'");

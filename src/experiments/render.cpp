@@ -8,6 +8,7 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/safe_env.hpp"
+#include "train/policy_source.hpp"
 #include "src/safety/safe_layer_env.hpp"
 #include "src/core/svg.hpp"
 #include "src/experiments/render_scene.hpp"
@@ -129,19 +130,26 @@ std::string fmt(const char* f, double x) {
 }  // namespace
 
 RenderResult render_episode(const RenderConfig& cfg) {
-  if (cfg.policy != "random" && cfg.policy != "zero")
-    throw std::invalid_argument("unknown render policy '" + printable_text(cfg.policy) + "' (known: random, zero)");
+  PolicyRequest preq;
+  preq.policy = cfg.policy;
+  preq.env = cfg.env;
+  preq.run_dir = cfg.run_dir;
+  preq.which = cfg.which;
+  preq.safety = cfg.safety;
+  preq.env_config = cfg.env_config;
+  PolicySource src = resolve_policy_source(preq);
   EnvRequest req;
-  req.name = cfg.env;
+  req.name = src.env;
   req.num_envs = 1;
-  req.safety = cfg.safety;
-  req.config = cfg.env_config;
+  req.safety = src.safety;
+  req.config = src.env_config;
   std::unique_ptr<BatchEnv> env = make_env(req);
   const BatchEnv* plain = env.get();
   if (const auto* safe = dynamic_cast<const SafeEnv*>(env.get())) plain = &safe->inner();
   if (const auto* sl = dynamic_cast<const SafeLayerEnv*>(env.get())) plain = &sl->inner();
   const std::unique_ptr<RenderRecorder> rec = make_render_recorder(*plain);
   const EnvSpec& spec = env->spec();
+  Policy& policy = src.bind(spec);
   env->seed(cfg.seed);
   Rng rng(cfg.seed, 0x72656e646572ull);  // the policy's own stream ("render")
   int col_collision = -1, col_limit = -1;
@@ -160,7 +168,7 @@ RenderResult render_episode(const RenderConfig& cfg) {
   std::vector<double> action(static_cast<size_t>(spec.act_dim), 0.0);
   const int limit = spec.horizon > 0 ? spec.horizon : 1000;
   for (int t = 0; t < limit; ++t) {
-    for (double& a : action) a = cfg.policy == "random" ? rng.uniform(-1.0, 1.0) : 0.0;
+    policy.act(env->buffers().obs.data(), 1, true, &rng, action.data());
     env->step(action.data());
     const EnvBuffers& B = env->buffers();
     frames.push_back(rec->frame(B.final_obs.data()));
@@ -200,9 +208,9 @@ RenderResult render_episode(const RenderConfig& cfg) {
   for (int s : collisions) coll[static_cast<size_t>(s - 1)] = 1.0;
   double x1 = 0.0, steps_hi = std::max(1, res.steps);
   nice_range(x1, steps_hi, kPlotTicksX);
-  const json data = {{"env", cfg.env},
+  const json data = {{"env", src.env},
                      {"policy", cfg.policy},
-                     {"safety", safety_layer_name(cfg.safety)},
+                     {"safety", safety_layer_name(src.safety)},
                      {"seed", cfg.seed},
                      {"dt", spec.dt},
                      {"steps", res.steps},
@@ -252,7 +260,7 @@ RenderResult render_episode(const RenderConfig& cfg) {
                             : !collisions.empty()     ? "collision"
                             : !limits.empty()         ? "joint limit"
                                                       : "terminal state";
-  const std::string title = cfg.env + " - " + cfg.policy + " policy - safety " + safety_layer_name(cfg.safety) +
+  const std::string title = src.env + " - " + cfg.policy + " policy - safety " + safety_layer_name(src.safety) +
                             " - seed " + std::to_string(cfg.seed) + ": " + std::to_string(res.steps) +
                             " steps (ended: " + ended + "), return " + fmt("%.1f", res.episode_return) + ", " +
                             std::to_string(res.collisions) + " collision" + (res.collisions == 1 ? "" : "s") +

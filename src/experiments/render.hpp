@@ -9,16 +9,21 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
+
 #include "atacom/safety_layer.hpp"
+#include "atacom/trainer.hpp"
 
 namespace atacom {
 
 struct RenderConfig {
-  std::string env;                              // table | shelf | nav | hri (any env with a recorder)
-  std::string policy = "random";                // random | zero
-  SafetyLayer safety = SafetyLayer::Atacom;     // between the policy and the env
-  uint64_t seed = 0;                            // env streams and the policy's noise
-  nlohmann::json env_config = nlohmann::json::object();  // overrides of the env's defaults
+  std::string env;                // table | shelf | nav | hri (any env with a recorder); optional with "trained"
+  std::string policy = "random";  // random | zero | la (the env's linear attractor) | trained (run_dir's, deterministic)
+  std::string run_dir;            // "trained" only
+  RunPolicy which = RunPolicy::Final;
+  std::optional<SafetyLayer> safety;  // between the policy and the env; unset: ATACOM, or the run's layer
+  uint64_t seed = 0;                  // env streams and the policy's noise
+  nlohmann::json env_config = nlohmann::json::object();  // overrides of the env's defaults (not with "trained")
 };
 
 struct RenderResult {
@@ -31,7 +36,8 @@ struct RenderResult {
 };
 
 // Runs one episode of env 0 (N = 1) and draws it. Throws std::invalid_argument
-// for an unknown env or policy, or an env without a picture.
+// for an unknown env or policy, a setting that does not apply, or an env
+// without a picture; std::runtime_error for an unreadable run.
 RenderResult render_episode(const RenderConfig& config);
 
 // The page around the episode's data (render_page.cpp): title, the data JSON
