@@ -18,6 +18,7 @@
 #include "src/core/svg.hpp"
 #include "train/adam.hpp"
 #include "train/autodiff.hpp"
+#include "train/redsdf_loss.hpp"
 #include "train/sdf_human_data.hpp"
 #include "train/sdf_tiago_data.hpp"
 
@@ -81,7 +82,8 @@ SdfTrainConfig default_sdf_train_config(const std::string& object) {
 void to_json(json& j, const SdfTrainConfig& c) {
   j = {{"object", c.object}, {"arch", c.arch},     {"data", c.data},       {"batch", c.batch},
        {"lr", c.lr},         {"lr_final", c.lr_final}, {"max_epochs", c.max_epochs}, {"patience", c.patience},
-       {"gamma", c.gamma},   {"near_weight", c.near_weight}, {"budget_s", c.budget_s}, {"init_seed", c.init_seed}};
+       {"gamma", c.gamma},   {"near_weight", c.near_weight}, {"align_weight", c.align_weight},
+       {"budget_s", c.budget_s}, {"init_seed", c.init_seed}};
 }
 
 void from_json(const json& j, SdfTrainConfig& c) {
@@ -96,6 +98,7 @@ void from_json(const json& j, SdfTrainConfig& c) {
   r.get("patience", c.patience, range::closed(1, 100000));
   r.get("gamma", c.gamma, range::closed(0.0, 10.0));
   r.get("near_weight", c.near_weight, range::closed(0.0, 1000.0));
+  r.get("align_weight", c.align_weight, range::closed(0.0, 1000.0));
   r.get("budget_s", c.budget_s, range::open_closed(0.0, 1e6));
   r.get("init_seed", c.init_seed);
   r.finish();
@@ -117,34 +120,6 @@ ShapeUnion sdf_object_geometry(const std::string& object, Eigen::Vector3d* centr
 }
 
 namespace {
-
-// The training graph: returns the loss node; rho_mean gets the mean rho node.
-Tape<float>::Id loss_graph(Tape<float>& tp, RedsdfModel& m, AlignedVector<float>& grads, const float* x,
-                           const float* n, const float* y, const float* w, int B, float gamma) {
-  using Id = Tape<float>::Id;
-  float* P = m.params.data();
-  float* G = grads.data();
-  auto lin = [&](const RedsdfLayer& l, Id in) {
-    const Id W = tp.leaf(P + l.w, G + l.w, l.in, l.out);
-    const Id b = tp.leaf(P + l.b, G + l.b, 1, l.out);
-    const Id o = tp.linear(in, W, b);
-    return l.relu ? tp.relu(o) : o;
-  };
-  Id h = tp.constant(x, B, m.arch.input_dim());
-  for (const auto& l : m.layout.trunk) h = lin(l, h);
-  const Id t = h;
-  for (const auto& l : m.layout.head) h = lin(l, h);
-  const Id f = h;
-  const Id bb = lin(m.layout.side[1], lin(m.layout.side[0], t));
-  const Id alpha = tp.affine(tp.softplus(tp.slice(bb, 0, 1)), 1.0f, 1.0f);
-  const Id rho = tp.affine(tp.sigmoid(tp.slice(bb, 1, 2)), 1.0f, 0.5f);
-  const Id nn = tp.constant(n, B, 1);
-  const Id sigma = tp.sigmoid(tp.mul(alpha, tp.sub(nn, rho)));
-  const Id d = tp.add(f, tp.mul(sigma, tp.sub(nn, f)));
-  const Id err = tp.sub(d, tp.constant(y, B, 1));
-  const Id wmse = tp.mean(tp.mul(tp.constant(w, B, 1), tp.square(err)));
-  return tp.add(wmse, tp.affine(tp.mean(rho), gamma, 0.0f));
-}
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -262,7 +237,10 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
   Adam<float> adam(m.params.size(), default_adam_config());
   Tape<float> tape;
   const int B = cfg.batch;
-  AlignedVector<float> bx(static_cast<size_t>(B) * IN), bn(static_cast<size_t>(B)), by(bn), bw(bn);
+  AlignedVector<float> bx(static_cast<size_t>(B) * IN), bn(static_cast<size_t>(B)), by(bn), bw(bn), bhas(bn),
+      bnrm(static_cast<size_t>(B) * 3);
+  RedsdfLoss<float> loss(m.arch, B);
+  const bool align = cfg.align_weight > 0.0;
   RedsdfBatch batch(m);
   std::vector<float> vp(static_cast<size_t>(3 * n_va)), vd(static_cast<size_t>(n_va)), vpose(size_t(n_va) * size_t(P));
   for (int i = 0; i < n_va; ++i) {
@@ -306,11 +284,17 @@ json train_sdf(const SdfTrainConfig& cfg, const std::string& dir, const std::str
         bn[size_t(r)] = std::sqrt(nn);
         by[size_t(r)] = s.y[size_t(j)];
         bw[size_t(r)] = weight(s.y[size_t(j)]);
+        if (align) {
+          for (int k = 0; k < 3; ++k) bnrm[size_t(3 * r + k)] = s.grad[size_t(3 * j + k)];
+          bhas[size_t(r)] = s.shifted[size_t(j)] ? 1.0f : 0.0f;
+        }
       }
       tape.clear();
-      const auto L = loss_graph(tape, m, grads, bx.data(), bn.data(), by.data(), bw.data(), B, float(cfg.gamma));
-      tape.backward(L);
-      loss_sum += tape.scalar(L);
+      const auto L = loss.record(tape, m.params.data(), grads.data(),
+                                 {B, bx.data(), bn.data(), by.data(), bw.data(), bnrm.data(), bhas.data()},
+                                 float(cfg.gamma), float(cfg.align_weight));
+      tape.backward(L.loss);
+      loss_sum += tape.scalar(L.loss);
       adam.step_fused(m.params.data(), grads.data(), lr);
     }
     const double tl = loss_sum / steps_per_epoch, vl = val_wmse();

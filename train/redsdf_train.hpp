@@ -1,8 +1,12 @@
 // Training a ReDSDF network from exact geometry (`atacom sdf-train`).
 //
-// Loss (reference section 7.3, without its gradient-alignment terms):
-//   L = mean_i w_i (d(x_i) - y_i)^2 + gamma mean_i rho(x_i),
-// w_i = near_weight where |y_i| < 0.1 m, else 1. Adam with a learning rate
+// Loss (reference section 7.3; train/redsdf_loss.hpp records it):
+//   L = mean_i w_i (d(x_i) - y_i)^2 + gamma mean_i rho(x_i)
+//       + align_weight mean_{i shifted} sin^2(angle(grad_p d(x_i), n_i)),
+// w_i = near_weight where |y_i| < 0.1 m, else 1; the last term (the
+// reference's two SVD projection terms, which for a scalar field both come to
+// sin^2) runs over the batch's shifted surface samples with n_i = the exact
+// label gradient, and is not recorded at all when align_weight = 0. Adam with a learning rate
 // decaying linearly from lr to lr_final over max_epochs; a 0.8/0.1/0.1
 // train/validation/test split; early stopping on the validation WMSE with
 // `patience` epochs (the best weights are kept), and a wall-clock budget.
@@ -29,6 +33,7 @@ struct SdfTrainConfig {
   int patience = 25;
   double gamma = 0.02;        // rho regulariser
   double near_weight = 4.0;   // loss weight of points within 0.1 m of the surface
+  double align_weight = 0.0;  // gradient-alignment term (0: today's loss, bit for bit)
   double budget_s = 240.0;    // wall-clock limit of the epoch loop
   uint64_t init_seed = 1;     // weights and batch order
 };

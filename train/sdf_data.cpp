@@ -75,11 +75,12 @@ SdfSamples make_static_sdf_samples(const ShapeUnion& object, const SdfDataConfig
   }
   Rng rng(cfg.seed, 0xda7a);
   SdfSamples out;
-  auto push = [&](const Eigen::Vector3d& q) {
+  auto push = [&](const Eigen::Vector3d& q, bool shifted) {
     Eigen::Vector3d g;
     const double d = union_distance(label, q, &g);
     for (int k = 0; k < 3; ++k) out.p.push_back(float(q(k))), out.grad.push_back(float(g(k)));
     out.y.push_back(float(d));
+    out.shifted.push_back(shifted);
     ++out.n;
   };
   int accepted = 0;
@@ -96,12 +97,12 @@ SdfSamples make_static_sdf_samples(const ShapeUnion& object, const SdfDataConfig
     // A face point buried inside another part is not on the union's surface.
     if (union_distance_exact(exact, q) < -1e-9) continue;
     ++accepted;
-    for (double e : cfg.epsilons) push(q + e * nrm);
+    for (double e : cfg.epsilons) push(q + e * nrm, true);
   }
   const int nvol = int(std::lround(cfg.volume_fraction * out.n));
   const Eigen::Vector3d vlo = lo.array() - cfg.volume_margin, vhi = hi.array() + cfg.volume_margin;
   for (int i = 0; i < nvol; ++i)
-    push({rng.uniform(vlo.x(), vhi.x()), rng.uniform(vlo.y(), vhi.y()), rng.uniform(vlo.z(), vhi.z())});
+    push({rng.uniform(vlo.x(), vhi.x()), rng.uniform(vlo.y(), vhi.y()), rng.uniform(vlo.z(), vhi.z())}, false);
   return out;
 }
 

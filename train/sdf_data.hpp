@@ -43,6 +43,9 @@ struct SdfSamples {
   std::vector<float> p;     // (n x 3) points, object frame
   std::vector<float> y;     // (n) exact signed distance
   std::vector<float> grad;  // (n x 3) exact gradient (nearest primitive's, unit)
+  // (n) 1: a surface sample shifted along its normal (the points the loss's
+  // alignment term uses, with `grad` as their normal), 0: a uniform volume sample.
+  std::vector<uint8_t> shifted;
 };
 
 // Samples for `object` (boxes only; other primitives are rejected with a

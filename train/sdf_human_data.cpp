@@ -49,12 +49,13 @@ SdfSamples make_human_sdf_samples(const HumanModel& model, const HumanMotionLibr
     const float* q = &motion.frames[size_t(frame) * kHumanPoseDim + kHumanRootDofs];
     out.poses.insert(out.poses.end(), q, q + kHumanDofs);
     human_body_capsules(model, q, cap);
-    auto push = [&](const Eigen::Vector3d& x) {
+    auto push = [&](const Eigen::Vector3d& x, bool shifted) {
       double g[3];
       const double d = human_body_distance(model, cap, blend, x.data(), g);
       for (int k = 0; k < 3; ++k) out.p.push_back(float(x(k))), out.grad.push_back(float(g[k]));
       out.y.push_back(float(d));
       out.pose_id.push_back(pi);
+      out.shifted.push_back(shifted);
       ++out.n;
     };
     // Capsule areas: cylinder 2 pi r L, the two hemispheres 4 pi r^2.
@@ -93,12 +94,12 @@ SdfSamples make_human_sdf_samples(const HumanModel& model, const HumanMotionLibr
       human_body_distance(model, cap, 0.0, s.data(), nullptr, &de);
       if (de < -1e-9) continue;  // buried in another capsule: not on the body's surface
       ++accepted;
-      for (double e : cfg.epsilons) push(s + e * nrm);
+      for (double e : cfg.epsilons) push(s + e * nrm, true);
     }
     const int nvol = int(std::lround(cfg.volume_fraction * accepted * double(cfg.epsilons.size())));
     const Eigen::Vector3d vm = Eigen::Vector3d::Constant(cfg.volume_margin), vlo = lo3 - vm, vhi = hi3 + vm;
     for (int i = 0; i < nvol; ++i)
-      push({rng.uniform(vlo.x(), vhi.x()), rng.uniform(vlo.y(), vhi.y()), rng.uniform(vlo.z(), vhi.z())});
+      push({rng.uniform(vlo.x(), vhi.x()), rng.uniform(vlo.y(), vhi.y()), rng.uniform(vlo.z(), vhi.z())}, false);
   }
   return out;
 }

@@ -97,12 +97,13 @@ SdfSamples make_tiago_sdf_samples(const SdfDataConfig& cfg) {
     ShapeUnion exact = body, label = body;
     exact.blend = 0.0;
     if (cfg.blend >= 0.0) label.blend = cfg.blend;
-    auto push = [&](const Eigen::Vector3d& x) {
+    auto push = [&](const Eigen::Vector3d& x, bool shifted) {
       Eigen::Vector3d g;
       const double d = union_distance(label, x, &g);
       for (int k = 0; k < 3; ++k) out.p.push_back(float(x(k))), out.grad.push_back(float(g(k)));
       out.y.push_back(float(d));
       out.pose_id.push_back(pi);
+      out.shifted.push_back(shifted);
       ++out.n;
     };
     std::vector<double> area;
@@ -117,14 +118,14 @@ SdfSamples make_tiago_sdf_samples(const SdfDataConfig& cfg) {
       sample_shape_surface(body.shapes[si], rng, s, nrm);
       if (union_distance_exact(exact, s) < -1e-9) continue;  // buried in another part: not on the body's surface
       ++accepted;
-      for (double e : cfg.epsilons) push(s + e * nrm);
+      for (double e : cfg.epsilons) push(s + e * nrm, true);
     }
     Eigen::Vector3d lo, hi;
     union_bounds(body, lo, hi);
     const int nvol = int(std::lround(cfg.volume_fraction * accepted * double(cfg.epsilons.size())));
     const Eigen::Vector3d vm = Eigen::Vector3d::Constant(cfg.volume_margin), vlo = lo - vm, vhi = hi + vm;
     for (int i = 0; i < nvol; ++i)
-      push({rng.uniform(vlo.x(), vhi.x()), rng.uniform(vlo.y(), vhi.y()), rng.uniform(vlo.z(), vhi.z())});
+      push({rng.uniform(vlo.x(), vhi.x()), rng.uniform(vlo.y(), vhi.y()), rng.uniform(vlo.z(), vhi.z())}, false);
   }
   return out;
 }

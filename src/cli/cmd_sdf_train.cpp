@@ -11,7 +11,7 @@ namespace {
 struct SdfTrainArgs {
   std::string object, out, config_file, hidden;
   int epochs = 0, patience = 0, surface_points = 0, batch = 0;
-  double budget_s = 0, lr = 0;
+  double budget_s = 0, lr = 0, align_weight = -1;
   int64_t seed = -1, data_seed = -1;
   bool quiet = false;
   std::string argv_line;
@@ -52,6 +52,7 @@ int run(SdfTrainArgs& a) {
   if (a.batch > 0) c.batch = a.batch;
   if (a.budget_s > 0) c.budget_s = a.budget_s;
   if (a.lr > 0) c.lr = a.lr;
+  if (a.align_weight >= 0) c.align_weight = a.align_weight;
   if (a.seed >= 0) c.init_seed = uint64_t(a.seed);
   if (a.data_seed >= 0) c.data.seed = uint64_t(a.data_seed);
   const nlohmann::json man = atacom::train_sdf(c, a.out, a.argv_line, !a.quiet);
@@ -79,6 +80,10 @@ atacom::cli::RegisterCommand reg(
            ->check(CLI::Range(1, 1 << 22));
        app.add_option("--batch", a->batch, "batch size")->check(CLI::Range(16, 1 << 16));
        app.add_option("--lr", a->lr, "initial Adam learning rate")->check(CLI::Range(1e-7, 1.0));
+       app.add_option("--align-weight", a->align_weight,
+                      "weight of the gradient-alignment loss term (mean sin^2 of the angle between grad d and the "
+                      "normal; default 0 = off)")
+           ->check(CLI::Range(0.0, 1000.0));
        app.add_option("--budget-s", a->budget_s, "wall-clock limit of the epoch loop, s")->check(CLI::PositiveNumber);
        app.add_option("--seed", a->seed, "weight init and batch order seed")->check(CLI::NonNegativeNumber);
        app.add_option("--data-seed", a->data_seed, "data sampling seed")->check(CLI::NonNegativeNumber);
