@@ -152,11 +152,13 @@ bool planar_least_violation_tiebreak(int m, int kk, const int* kept, const doubl
   // iteration bound), and then the general relaxed QP decides, as before.
   // Stationarity over the box: the gradient sum max(0, r_i) g_i vanishes on
   // the free coordinates and points inward at the bounds (relative 1e-10).
+  double res[kPlanarMaxRows];  // residuals at a
   double grad[2] = {0.0, 0.0}, size[2] = {0.0, 0.0};
   for (int c = 0; c < kk; ++c) {
     const double* gi = g + size_t(kept[c]) * m;
     double r = -h[kept[c]];
     for (int j = 0; j < m; ++j) r += gi[j] * a[j];
+    res[c] = r;
     if (!(r > 0.0)) continue;
     for (int j = 0; j < m; ++j) grad[j] += r * gi[j], size[j] += std::fabs(r * gi[j]);
   }
@@ -164,22 +166,27 @@ bool planar_least_violation_tiebreak(int m, int kk, const int* kept, const doubl
     const double tol = 1e-10 * size[j] + 1e-300;
     if (a[j] <= -1.0 ? grad[j] < -tol : a[j] >= 1.0 ? grad[j] > tol : std::fabs(grad[j]) > tol) return false;
   }
-  double n0 = 0.0, n1 = 0.0;
-  bool have = false;
+  int first = -1;
   for (int c = 0; c < kk; ++c) {
-    const double* gi = g + size_t(kept[c]) * m;
-    double r = -h[kept[c]];
-    for (int j = 0; j < m; ++j) r += gi[j] * a[j];
-    if (!(r > kTol)) continue;
+    if (!(res[c] > kTol)) continue;
     if (m == 1) return true;
-    const double inv = 1.0 / gscale[c], q0 = gi[0] * inv, q1 = gi[1] * inv;
-    if (!have) {
-      n0 = q0, n1 = q1, have = true;
+    if (first < 0) {
+      first = c;
       continue;
     }
-    const double D = std::fabs(n0 * q1 - n1 * q0);
-    if (D > kIllConditioned) return true;
-    if (D > kRoundingParallel) return false;  // nearly parallel: the general relaxed QP decides
+    // |sin| of the angle between the two normals, without dividing
+    const double* p = g + size_t(kept[first]) * m;
+    const double* q = g + size_t(kept[c]) * m;
+    const double D = std::fabs(p[0] * q[1] - p[1] * q[0]), scale = gscale[first] * gscale[c];
+    if (D > kIllConditioned * scale) return true;
+    if (D > kRoundingParallel * scale) return false;  // nearly parallel: the general relaxed QP decides
+  }
+  const bool have = first >= 0;
+  double n0 = 0.0, n1 = 0.0;
+  if (have) {
+    const double inv = 1.0 / gscale[first];
+    n0 = g[size_t(kept[first]) * m] * inv;
+    n1 = m == 2 ? g[size_t(kept[first]) * m + 1] * inv : 0.0;
   }
   if (!have || m == 1) return false;
   const double u0 = -n1, u1 = n0;
@@ -190,10 +197,9 @@ bool planar_least_violation_tiebreak(int m, int kk, const int* kept, const doubl
   };
   bound(u0, 1.0 - a[0]), bound(-u0, 1.0 + a[0]), bound(u1, 1.0 - a[1]), bound(-u1, 1.0 + a[1]);
   for (int c = 0; c < kk; ++c) {
+    if (res[c] > kTol) continue;  // violated, parallel to n
     const double* gi = g + size_t(kept[c]) * m;
-    const double r = gi[0] * a[0] + gi[1] * a[1] - h[kept[c]];
-    if (r > kTol) continue;  // violated, parallel to n
-    bound(gi[0] * u0 + gi[1] * u1, std::max(0.0, -r));
+    bound(gi[0] * u0 + gi[1] * u1, std::max(0.0, -res[c]));
   }
   const double t = std::clamp(u0 * (a_pi[0] - a[0]) + u1 * (a_pi[1] - a[1]), std::min(tlo, 0.0), std::max(thi, 0.0));
   a[0] = std::clamp(a[0] + t * u0, -1.0, 1.0);
