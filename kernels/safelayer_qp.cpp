@@ -254,26 +254,39 @@ bool ldp(int m, int kk, const double* gn, const double* hn, const double* a_pi, 
     double pg = 0.0, tr = 0.0;
     for (int f = 0; f < nf; ++f) pg = std::max(pg, std::fabs(grad[freev[f]])), tr += H[freev[f] * m + freev[f]];
     if (obj == 0.0 || pg == 0.0 || tr == 0.0) return;
-    // Cholesky of the free block (+ a relative ridge: it is singular when
-    // fewer rows are violated than variables are free).
-    double* L = S.qr.data();
+    // Newton step on the free block H_ff y = -grad_f (+ a relative ridge: it
+    // is singular when fewer rows are violated than variables are free).
+    // One or two free variables (m <= 2) in closed form, without the
+    // Cholesky's dependent square roots and divisions; the guard is the
+    // Cholesky's (second pivot det / H_00 at least the ridge).
     const double ridge = 1e-12 * tr / nf;
-    for (int p = 0; p < nf; ++p)
-      for (int q = 0; q <= p; ++q) {
-        double s = H[freev[p] * m + freev[q]] + (p == q ? ridge : 0.0);
-        for (int t = 0; t < q; ++t) s -= L[p * m + t] * L[q * m + t];
-        L[p * m + q] = p == q ? std::sqrt(std::max(s, ridge)) : s / L[q * m + q];
-      }
     double* y = S.x.data();
-    for (int p = 0; p < nf; ++p) {
-      double s = -grad[freev[p]];
-      for (int t = 0; t < p; ++t) s -= L[p * m + t] * y[t];
-      y[p] = s / L[p * m + p];
-    }
-    for (int p = nf - 1; p >= 0; --p) {
-      double s = y[p];
-      for (int t = p + 1; t < nf; ++t) s -= L[t * m + p] * y[t];
-      y[p] = s / L[p * m + p];
+    if (nf == 1) {
+      const double h00 = H[freev[0] * m + freev[0]] + ridge;
+      y[0] = -grad[freev[0]] / std::max(h00, ridge);
+    } else if (m == 2 && nf == 2) {
+      const double h00 = H[0] + ridge, h10 = H[m], h11 = H[m + 1] + ridge;
+      const double det = std::max(h00 * h11 - h10 * h10, ridge * h00);
+      y[0] = (h10 * grad[1] - h11 * grad[0]) / det;
+      y[1] = (h10 * grad[0] - h00 * grad[1]) / det;
+    } else {
+      double* L = S.qr.data();
+      for (int p = 0; p < nf; ++p)
+        for (int q = 0; q <= p; ++q) {
+          double s = H[freev[p] * m + freev[q]] + (p == q ? ridge : 0.0);
+          for (int t = 0; t < q; ++t) s -= L[p * m + t] * L[q * m + t];
+          L[p * m + q] = p == q ? std::sqrt(std::max(s, ridge)) : s / L[q * m + q];
+        }
+      for (int p = 0; p < nf; ++p) {
+        double s = -grad[freev[p]];
+        for (int t = 0; t < p; ++t) s -= L[p * m + t] * y[t];
+        y[p] = s / L[p * m + p];
+      }
+      for (int p = nf - 1; p >= 0; --p) {
+        double s = y[p];
+        for (int t = p + 1; t < nf; ++t) s -= L[t * m + p] * y[t];
+        y[p] = s / L[p * m + p];
+      }
     }
     std::fill_n(dir, m, 0.0);
     for (int p = 0; p < nf; ++p) dir[freev[p]] = y[p];
@@ -343,10 +356,15 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
   int kk = 0, worst = -1;
   double worst_dist = 0.0;
   bool stuck = false;  // a violated row the action cannot move this step
+  // A kept row violated by more than twice the tolerance at every box point
+  // (its least value over the box is -sum |g_ij| - h_i): no candidate of
+  // steps 2-3 could pass their checks, so they are skipped (nav: 96% of its
+  // infeasible envs, a row out of one period's reach).
+  bool unreachable = false;
   for (int i = 0; i < k; ++i) {
     const double* gi = g + size_t(i) * m;
-    double gg = 0.0, r = -h[i];
-    for (int j = 0; j < m; ++j) gg += gi[j] * gi[j], r += gi[j] * a_pi[j];
+    double gg = 0.0, r = -h[i], low = -h[i];
+    for (int j = 0; j < m; ++j) gg += gi[j] * gi[j], r += gi[j] * a_pi[j], low -= std::fabs(gi[j]);
     if (!(gg > kSafeLayerRowEps * kSafeLayerRowEps)) {
       stuck = stuck || h[i] < -kTol;
       continue;
@@ -354,6 +372,7 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
     S.kept[kk] = i;
     S.gscale[kk] = std::sqrt(gg);
     ++kk;
+    unreachable = unreachable || low > 2.0 * kTol;
     if (r > kTol && r / std::sqrt(gg) > worst_dist) worst_dist = r / std::sqrt(gg), worst = i;
   }
   const uint32_t stuck_bit = stuck ? kSafeLayerInfeasible : 0u;
@@ -362,8 +381,11 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
     R.status = stuck_bit;
     return R;
   }
+  bool planar = opt.planar && m <= 2 && kk <= kPlanarMaxRows;
+  int iters = 0;
+  bool limit = false;
   // 2. Dalal's closed form on that row: exact when it lands in the feasible set.
-  {
+  if (!unreachable) {
     const double* gw = g + size_t(worst) * m;
     double gg = 0.0, r = -h[worst];
     for (int j = 0; j < m; ++j) gg += gw[j] * gw[j], r += gw[j] * a_pi[j];
@@ -380,18 +402,15 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
   }
   // 3. The exact QP: enumeration for m <= 2, else (or when the enumeration
   // cannot decide) NNLS on the LDP.
-  bool planar = opt.planar && m <= 2 && kk <= kPlanarMaxRows;
-  int iters = 0;
-  bool limit = false;
   bool ok = false;
-  if (planar) {
+  if (planar && !unreachable) {
     for (int c = 0; c < kk; ++c) S.hk[c] = h[S.kept[c]];
     iters = 1;
     const int res = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a, S.mu.data(), S);
     ok = res == 1;
     planar = res != -1;
   }
-  if (!planar) {
+  if (!planar && !unreachable) {
     for (int c = 0; c < kk; ++c) {
       const int i = S.kept[c];
       for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(i) * m + j] / S.gscale[c];
@@ -412,6 +431,11 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
   // 4. Infeasible: least squared violation in the box, then the closest such action.
   std::copy_n(a_pi, m, a);
   least_violation_newton(m, kk, S.kept.data(), g, h, a, S, &iters);
+  if (planar && planar_least_violation_tiebreak(m, kk, S.kept.data(), g, h, S.gscale.data(), a_pi, a)) {
+    R.iterations = 1 + iters;
+    R.status = stuck_bit | kSafeLayerInfeasible | (limit ? kSafeLayerIterationLimit : 0u);
+    return R;
+  }
   for (int c = 0; c < kk; ++c) {
     const int i = S.kept[c];
     double r = 0.0;
@@ -425,12 +449,13 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
   if (planar) {
     ++iters;
     relaxed = planar_solve(m, kk, S.kept.data(), g, S.hk.data(), S.gscale.data(), a_pi, a2, nullptr, S);
-    if (relaxed == -1)
-      for (int c = 0; c < kk; ++c)
-        for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(S.kept[c]) * m + j] / S.gscale[c];
   }
-  if (relaxed == -1)
+  if (relaxed == -1) {
+    // unit normals (step 3's NNLS formed them unless it was skipped or the enumeration decided)
+    for (int c = 0; c < kk; ++c)
+      for (int j = 0; j < m; ++j) S.gn[size_t(c) * m + j] = g[size_t(S.kept[c]) * m + j] / S.gscale[c];
     relaxed = ldp(m, kk, S.gn.data(), S.h2.data(), a_pi, a2, nullptr, S, &iters, &limit2) && into_box(m, a2);
+  }
   const bool relaxed_ok = relaxed == 1;
   if (relaxed_ok && violation_objective(m, kk, S.kept.data(), g, h, a2) <=
                         violation_objective(m, kk, S.kept.data(), g, h, a) * (1.0 + 1e-9) + 1e-300)

@@ -45,4 +45,13 @@ Result solve(int m, int k, const double* g, const double* h, const double* a_pi,
 int planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
                   const double* a_pi, double* a, double* mu, Scratch& S);
 
+// m <= 2 and kk <= kPlanarMaxRows, infeasible, a the least-violation action (the minimiser of
+// 1/2 sum max(0, g a - h)^2 over the box, h the raw right-hand sides): moves a
+// to the least-violation action closest to a_pi and returns true, or returns
+// false (the relaxed QP decides then) when a is not stationary over the box
+// (Newton stopped short) or rows violated at a are nearly but not exactly
+// parallel.
+bool planar_least_violation_tiebreak(int m, int kk, const int* kept, const double* g, const double* h,
+                                     const double* gscale, const double* a_pi, double* a);
+
 }  // namespace atacom::safelayer_qp

@@ -15,6 +15,8 @@
 //     farthest violated row's distance by more than the tolerance allows.
 // Geometry on unit-normal rows; feasibility on the raw rows (kSafeLayerFeasTol)
 // and the box (slack kBoxSlack, then clipped), as the NNLS path checks.
+// Also the infeasible case's tie-break for m <= 2 (the least-violation action
+// closest to a_pi, in closed form from Newton's least-violation action).
 #include <algorithm>
 #include <cmath>
 
@@ -32,6 +34,11 @@ constexpr double kParallel = 1e-12;  // |sin| of the angle below which two lines
 // rounding error ~ 1e-16 / |sin| nears the tolerance): when no candidate is
 // feasible and such a pair was seen, the enumeration does not decide.
 constexpr double kIllConditioned = 1e-6;
+// Below this |sin| two unit normals are parallel up to the rounding of their
+// normalisation and of D itself (FMA-contracted, D of exactly opposite rows
+// is a product's rounding error, ~1e-17): their vertex is rounding noise,
+// not an ill-conditioned candidate (nav's opposite wall rows).
+constexpr double kRoundingParallel = 1e-15;
 
 // Constraint t of the planar problem: t < kk a kept row (unit normal), then
 // a_j <= 1 and -a_j <= 1 for each j.
@@ -108,7 +115,7 @@ int planar_m(int kk, const int* kept, const double* g, const double* hk, const d
         if (t == s || (t < s && con[t].r > 0.0)) continue;
         const Con& q = con[t];
         const double D = p.n0 * q.n1 - p.n1 * q.n0;
-        ill = ill || !(std::fabs(D) > kIllConditioned);
+        ill = ill || (std::fabs(D) > kRoundingParallel && !(std::fabs(D) > kIllConditioned));
         if (!(std::fabs(D) > kParallel)) continue;
         // [p; q] d = [p.r; q.r], then d = lp p + lq q.
         const double d[2] = {(p.r * q.n1 - q.r * p.n1) / D, (p.n0 * q.r - q.n0 * p.r) / D};
@@ -130,6 +137,75 @@ int planar_m(int kk, const int* kept, const double* g, const double* hk, const d
 }
 
 }  // namespace
+
+bool planar_least_violation_tiebreak(int m, int kk, const int* kept, const double* g, const double* h,
+                                     const double* gscale, const double* a_pi, double* a) {
+  // The violations are constant over the convex set of minimisers (a sum of
+  // convex terms is constant on a segment only if each is affine there, and
+  // a squared violation is strictly convex where positive): a violated row
+  // keeps g_i a, a satisfied row stays satisfied. So two violated rows with
+  // independent normals pin a (for m = 1 one does); violated rows all
+  // parallel to n leave the segment a + t u, u perpendicular to n, inside
+  // the box and the satisfied rows, and the closest point to a_pi on it is
+  // the answer.
+  // a must be a least-violation action: Newton can stop short (line search,
+  // iteration bound), and then the general relaxed QP decides, as before.
+  // Stationarity over the box: the gradient sum max(0, r_i) g_i vanishes on
+  // the free coordinates and points inward at the bounds (relative 1e-10).
+  double res[kPlanarMaxRows];  // residuals at a
+  double grad[2] = {0.0, 0.0}, size[2] = {0.0, 0.0};
+  for (int c = 0; c < kk; ++c) {
+    const double* gi = g + size_t(kept[c]) * m;
+    double r = -h[kept[c]];
+    for (int j = 0; j < m; ++j) r += gi[j] * a[j];
+    res[c] = r;
+    if (!(r > 0.0)) continue;
+    for (int j = 0; j < m; ++j) grad[j] += r * gi[j], size[j] += std::fabs(r * gi[j]);
+  }
+  for (int j = 0; j < m; ++j) {
+    const double tol = 1e-10 * size[j] + 1e-300;
+    if (a[j] <= -1.0 ? grad[j] < -tol : a[j] >= 1.0 ? grad[j] > tol : std::fabs(grad[j]) > tol) return false;
+  }
+  int first = -1;
+  for (int c = 0; c < kk; ++c) {
+    if (!(res[c] > kTol)) continue;
+    if (m == 1) return true;
+    if (first < 0) {
+      first = c;
+      continue;
+    }
+    // |sin| of the angle between the two normals, without dividing
+    const double* p = g + size_t(kept[first]) * m;
+    const double* q = g + size_t(kept[c]) * m;
+    const double D = std::fabs(p[0] * q[1] - p[1] * q[0]), scale = gscale[first] * gscale[c];
+    if (D > kIllConditioned * scale) return true;
+    if (D > kRoundingParallel * scale) return false;  // nearly parallel: the general relaxed QP decides
+  }
+  const bool have = first >= 0;
+  double n0 = 0.0, n1 = 0.0;
+  if (have) {
+    const double inv = 1.0 / gscale[first];
+    n0 = g[size_t(kept[first]) * m] * inv;
+    n1 = m == 2 ? g[size_t(kept[first]) * m + 1] * inv : 0.0;
+  }
+  if (!have || m == 1) return false;
+  const double u0 = -n1, u1 = n0;
+  double tlo = -INFINITY, thi = INFINITY;
+  auto bound = [&](double gu, double s) {  // t gu <= s, s >= 0
+    if (gu > 0.0) thi = std::min(thi, s / gu);
+    else if (gu < 0.0) tlo = std::max(tlo, s / gu);
+  };
+  bound(u0, 1.0 - a[0]), bound(-u0, 1.0 + a[0]), bound(u1, 1.0 - a[1]), bound(-u1, 1.0 + a[1]);
+  for (int c = 0; c < kk; ++c) {
+    if (res[c] > kTol) continue;  // violated, parallel to n
+    const double* gi = g + size_t(kept[c]) * m;
+    bound(gi[0] * u0 + gi[1] * u1, std::max(0.0, -res[c]));
+  }
+  const double t = std::clamp(u0 * (a_pi[0] - a[0]) + u1 * (a_pi[1] - a[1]), std::min(tlo, 0.0), std::max(thi, 0.0));
+  a[0] = std::clamp(a[0] + t * u0, -1.0, 1.0);
+  a[1] = std::clamp(a[1] + t * u1, -1.0, 1.0);
+  return true;
+}
 
 int planar_solve(int m, int kk, const int* kept, const double* g, const double* hk, const double* gscale,
                   const double* a_pi, double* a, double* mu, Scratch& S) {

@@ -141,6 +141,85 @@ TEST_CASE("safelayer fast paths: the m <= 2 enumeration equals NNLS on random, d
   CHECK(infeasible > 1000);
 }
 
+// The m <= 2 least-violation tie-break (safelayer_qp::planar_least_violation_tiebreak)
+// against the general step (projected Newton, then the relaxed LDP by NNLS):
+// the same least-violation action closest to a_pi. Rows are kept well
+// conditioned (random normals, or exactly opposite and axis-aligned rows as
+// nav's walls and the box give), so that action is unique and comparable.
+TEST_CASE("safelayer fast paths: the m <= 2 least-violation tie-break equals the general solver on infeasible problems") {
+  safelayer_qp::Scratch S1, S2;
+  int compared = 0, pinned = 0, segment = 0, moved = 0;
+  for (uint64_t seed = 1; seed <= 400; ++seed) {
+    Rng rng(23, seed);
+    for (int trial = 0; trial < 25; ++trial) {
+      const int m = trial % 5 == 0 ? 1 : 2, k = 1 + static_cast<int>(rng.uniform() * 8);
+      const int kind = trial % 3;
+      Problem q;
+      q.m = m;
+      q.k = k;
+      q.g.resize(size_t(k) * m);
+      q.h.resize(k);
+      q.a_pi.resize(m);
+      for (int i = 0; i < k; ++i) {
+        double* gi = q.g.data() + size_t(i) * m;
+        if (kind == 1 && i == 1) {  // the opposite of row 0 with no gap between them (nav's walls)
+          for (int j = 0; j < m; ++j) gi[j] = -q.g[j];
+          q.h[i] = -q.h[0] - 0.03 * rng.uniform(0.05, 1.0);
+          continue;
+        }
+        for (int j = 0; j < m; ++j) gi[j] = 0.03 * rng.normal();
+        if (kind == 2 && i == 0) {  // a row along an axis out of the box's reach
+          for (int j = 1; j < m; ++j) gi[j] = 0.0;
+          q.h[i] = -std::fabs(gi[0]) * rng.uniform(1.05, 2.0);
+          continue;
+        }
+        q.h[i] = kind == 0 ? rng.uniform(-0.06, 0.02) : rng.uniform(-0.01, 0.06);
+      }
+      for (auto& v : q.a_pi) v = rng.uniform(-1.0, 1.0);
+      S1.setup(m, k);
+      S2.setup(m, k);
+      std::vector<double> a1(m), a2(m);
+      const auto r1 = safelayer_qp::solve(m, k, q.g.data(), q.h.data(), q.a_pi.data(), a1.data(), nullptr, S1);
+      const auto r2 = safelayer_qp::solve(m, k, q.g.data(), q.h.data(), q.a_pi.data(), a2.data(), nullptr, S2,
+                                          {.planar = false});
+      if (r2.status & kSafeLayerIterationLimit) continue;
+      INFO("seed " << seed << " trial " << trial << " m " << m << " k " << k << " kind " << kind);
+      REQUIRE(r1.status == r2.status);
+      if (!(r1.status & kSafeLayerInfeasible)) continue;
+      REQUIRE(sq_violation(q, a1.data()) <= sq_violation(q, a2.data()) * (1 + 1e-9) + 1e-20);
+      for (int j = 0; j < m; ++j) {
+        REQUIRE(std::fabs(a1[j]) <= 1.0);
+        REQUIRE(a1[j] == Approx(a2[j]).margin(1e-7));
+      }
+      // Which case of the tie-break decided: rows violated at the answer
+      // with independent normals (the answer is pinned), or all parallel (the
+      // closest point of a segment; `moved` when that is not an end of it).
+      int nv = 0;
+      bool independent = m == 1;
+      double n0 = 0.0, n1 = 0.0;
+      for (int i = 0; i < k; ++i) {
+        const double* gi = q.g.data() + size_t(i) * m;
+        double r = -q.h[i], gg = 0.0;
+        for (int j = 0; j < m; ++j) r += gi[j] * a1[j], gg += gi[j] * gi[j];
+        if (!(r > kSafeLayerFeasTol)) continue;
+        if (m == 2 && nv++ == 0) n0 = gi[0] / std::sqrt(gg), n1 = gi[1] / std::sqrt(gg);
+        else if (m == 2) independent = independent || std::fabs(n0 * gi[1] - n1 * gi[0]) / std::sqrt(gg) > 1e-6;
+      }
+      if (independent) {
+        ++pinned;
+      } else {
+        ++segment;
+        moved += std::fabs(a1[0]) < 1.0 && std::fabs(a1[1]) < 1.0;
+      }
+      ++compared;
+    }
+  }
+  CHECK(compared > 3000);
+  CHECK(pinned > 500);
+  CHECK(segment > 500);
+  CHECK(moved > 200);
+}
+
 TEST_CASE("safelayer fast paths: parallel and identical rows, vertices on the box, hand-checked") {
   safelayer_qp::Scratch S;
   S.setup(2, 4);
