@@ -184,7 +184,10 @@ TEST_CASE("safelayer fast paths: the m <= 2 least-violation tie-break equals the
                                           {.planar = false});
       if (r2.status & kSafeLayerIterationLimit) continue;
       INFO("seed " << seed << " trial " << trial << " m " << m << " k " << k << " kind " << kind);
-      REQUIRE(r1.status == r2.status);
+      // The fast path may decline and hand the env to the general QP, whose
+      // iteration bound then depends on rounding (compilers contract FMAs
+      // differently): the flag may differ, the answer may not.
+      REQUIRE((r1.status & ~kSafeLayerIterationLimit) == r2.status);
       if (!(r1.status & kSafeLayerInfeasible)) continue;
       REQUIRE(sq_violation(q, a1.data()) <= sq_violation(q, a2.data()) * (1 + 1e-9) + 1e-20);
       for (int j = 0; j < m; ++j) {
