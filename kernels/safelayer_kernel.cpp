@@ -268,7 +268,7 @@ void safelayer_range(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLay
     const int count = std::min(lanes::kLanes, end - lo);
     const LaneScreen sc = screen_lanes(mod, B, lo, count, S);
     const uint32_t all = (1u << count) - 1u;
-    uint32_t todo = all;  // lanes still to write one by one
+    uint32_t pending = all;  // lanes still to write one by one
     if (count == lanes::kLanes && !opt.store_active_rows) {
       // Whole block as if every env kept a_pi, in vector stores (the envs'
       // outputs are contiguous); the lanes below overwrite their envs.
@@ -281,10 +281,10 @@ void safelayer_range(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLay
         O.iterations[size_t(lo) + l] = 0;
         O.status[size_t(lo) + l] = (sc.alpha_bad >> l & 1) ? kSafeLayerAlphaNonFinite : 0u;
       }
-      todo = ~(sc.keep & sc.finite) & all;
+      pending = ~(sc.keep & sc.finite) & all;
     }
-    for (; todo; todo &= todo - 1) {
-      const int l = __builtin_ctz(todo);
+    for (; pending; pending &= pending - 1) {
+      const int l = __builtin_ctz(pending);
       const int e = lo + l;
       for (int j = 0; j < m; ++j) a_pi[j] = S.l_api[j][l];
       const uint32_t status = (sc.alpha_bad >> l & 1) ? kSafeLayerAlphaNonFinite : 0u;
