@@ -1,8 +1,13 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <sstream>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include <nlohmann/json.hpp>
 
@@ -57,6 +62,96 @@ TEST_CASE("adam: the fused step equals step + zero_grad + Polyak", "[adam]") {
     REQUIRE(p2[i] == Approx(p[i]).epsilon(1e-6).margin(1e-7));
     REQUIRE(tgt2[i] == Approx(tgt[i]).epsilon(1e-6).margin(1e-7));
   }
+}
+
+namespace {
+// The fused step as it was written before it ran in chunks (commit
+// b823ce0): eight Eigen array passes per block of 2^14. Its bits are the
+// ones every committed run was trained with.
+template <class T>
+void fused_step_expr(T* p, T* g, T* m, T* v, T* target, int64_t n, int64_t t, double lr, double tau) {
+  using A = Eigen::Array<T, Eigen::Dynamic, 1>;
+  auto flush = [](auto& x) { x = (x.abs() < std::numeric_limits<T>::min()).select(T(0), x); };
+  const atacom::AdamConfig cfg = atacom::default_adam_config();
+  const T b1 = T(cfg.beta1), b2 = T(cfg.beta2), eps = T(cfg.eps);
+  const T step_size = T(lr / (1.0 - std::pow(cfg.beta1, double(t))));
+  const T inv_sqrt_bc2 = T(1.0 / std::sqrt(1.0 - std::pow(cfg.beta2, double(t))));
+  const T ta = T(1.0 - tau), tb = T(tau);
+  for (int64_t lo = 0; lo < n; lo += int64_t{1} << 14) {
+    const Eigen::Index k = std::min<int64_t>(n - lo, int64_t{1} << 14);
+    Eigen::Map<A> P(p + lo, k), M(m + lo, k), V(v + lo, k), G(g + lo, k);
+    flush(G);
+    M = b1 * M + (T(1) - b1) * G;
+    V = b2 * V + (T(1) - b2) * G.square();
+    flush(M);
+    flush(V);
+    P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
+    G.setZero();
+    if (target) {
+      Eigen::Map<A> Tg(target + lo, k);
+      Tg = ta * Tg + tb * P;
+    }
+  }
+}
+
+// A view into buf on the same 64-byte phase as like (up to 15 elements in).
+template <class T>
+T* same_phase(std::vector<T>& buf, const T* like) {
+  const auto phase = [](const T* x) { return (reinterpret_cast<uintptr_t>(x) % 64) / sizeof(T); };
+  const size_t per_line = 64 / sizeof(T);
+  return buf.data() + (phase(like) + per_line - phase(buf.data())) % per_line;
+}
+
+template <class T>
+void check_fused_bits() {
+  // The Eigen passes' bits depend on each array's 64-byte phase, so the
+  // reference runs on arrays of the same phases as the tested ones. Phases:
+  // all equal (the chunked path) and one off (the fallback); sizes cross
+  // block and packet boundaries; gradients reach below the smallest normal.
+  atacom::Rng r(7, 0);
+  for (const int64_t n : {int64_t(5), int64_t(40000), int64_t(3 * 16384 + 7)})
+    for (int shift = 0; shift < 6; ++shift) {
+      const bool with_target = shift % 2 == 0, mixed = shift >= 4;
+      atacom::Adam<T> opt(size_t(n), atacom::default_adam_config());
+      const T* m_like = opt.first_moment().data();
+      std::vector<T> bp(size_t(n + 64)), bg(bp.size()), bt(bp.size()), rp(bp.size()), rg(bp.size()), rt(bp.size()),
+          rm(bp.size(), T(0)), rv(bp.size(), T(0));
+      // Tested side: p, g, target on m's phase plus (shift / 2) lines' worth
+      // of whole elements, and g one element off when mixed.
+      T* p = same_phase(bp, m_like) + shift / 2 * (64 / sizeof(T));
+      T* g = same_phase(bg, m_like) + (mixed ? 1 : 0);
+      T* t = same_phase(bt, m_like);
+      T* p2 = same_phase(rp, p);
+      T* g2 = same_phase(rg, g);
+      T* t2 = same_phase(rt, t);
+      T* m2 = same_phase(rm, m_like);
+      T* v2 = same_phase(rv, opt.second_moment().data());
+      for (int64_t i = 0; i < n; ++i) {
+        p[i] = p2[i] = T(r.uniform(-1, 1));
+        t[i] = t2[i] = T(r.uniform(-1, 1));
+      }
+      for (int step = 1; step <= 4; ++step) {
+        for (int64_t i = 0; i < n; ++i) {
+          const double e = std::exp(r.uniform(-100, 0));
+          g[i] = g2[i] = i % 31 == 0 ? T(0) : i % 17 == 0 ? std::numeric_limits<T>::denorm_min() : T(r.uniform(-1, 1) * e);
+        }
+        opt.step_fused(p, g, 1e-3, with_target ? t : nullptr, 0.01);
+        fused_step_expr(p2, g2, m2, v2, with_target ? t2 : nullptr, n, step, 1e-3, 0.01);
+      }
+      INFO("n " << n << " shift " << shift);
+      const size_t bytes = size_t(n) * sizeof(T);
+      CHECK(std::memcmp(p, p2, bytes) == 0);
+      CHECK(std::memcmp(g, g2, bytes) == 0);
+      CHECK(std::memcmp(t, t2, bytes) == 0);
+      CHECK(std::memcmp(opt.first_moment().data(), m2, bytes) == 0);
+      CHECK(std::memcmp(opt.second_moment().data(), v2, bytes) == 0);
+    }
+}
+}  // namespace
+
+TEST_CASE("adam: the chunked fused step has the bits of the whole-block Eigen passes, on every alignment", "[adam]") {
+  check_fused_bits<float>();
+  check_fused_bits<double>();
 }
 
 TEST_CASE("adam: moments never become subnormal (they would slow every update ~100x)", "[adam]") {

@@ -1,6 +1,8 @@
 #include "train/adam.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <istream>
 #include <ostream>
@@ -74,30 +76,77 @@ void Adam<T>::step(T* p, const T* g, double lr) {
   });
 }
 
+namespace {
+struct FusedCoeffs {
+  double b1, b2, eps, step_size, inv_sqrt_bc2, ta, tb;
+};
+
+// The fused step on [lo, hi) as Eigen array expressions: the definition of
+// its bits. Eigen takes the elements before the first aligned packet of each
+// destination and after the last whole one on its scalar path, and there
+// its sqrt is exact while the packet sqrt (EIGEN_FAST_MATH) is not, so which
+// elements go which way is part of the result.
+template <class T>
+void fused_range_expr(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, const FusedCoeffs& c) {
+  using A = Eigen::Array<T, Eigen::Dynamic, 1>;
+  const T b1 = T(c.b1), b2 = T(c.b2), eps = T(c.eps), step_size = T(c.step_size), inv_sqrt_bc2 = T(c.inv_sqrt_bc2);
+  const Eigen::Index n = hi - lo;
+  Eigen::Map<A> P(p + lo, n), M(m + lo, n), V(v + lo, n), G(g + lo, n);
+  flush_subnormal(G);
+  M = b1 * M + (T(1) - b1) * G;
+  V = b2 * V + (T(1) - b2) * G.square();
+  flush_subnormal(M);
+  flush_subnormal(V);
+  P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
+  G.setZero();
+  if (target) {
+    Eigen::Map<A> Tg(target + lo, n);
+    Tg = T(c.ta) * Tg + T(c.tb) * P;
+  }
+}
+
+// The same step, same bits, in chunks that stay in L1: the expressions
+// make eight passes, and over a whole 2^14 block each pass streams from L2.
+// Chunk boundaries sit on packet boundaries, so every element takes the
+// path it takes over the whole block (a chunk is all packets, the block's
+// scalar head and tail are run alone). That needs all five arrays on one
+// alignment phase; otherwise the block runs whole.
+template <class T>
+void fused_block(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, const FusedCoeffs& c) {
+  using Traits = Eigen::internal::packet_traits<T>;
+  // Eigen aligns its packet loops to a whole packet (the packet's size for
+  // every float and double packet).
+  constexpr int64_t kLanes = Traits::Vectorizable ? Traits::size : 1;
+  constexpr uintptr_t kAlign = uintptr_t(kLanes) * sizeof(T);
+  constexpr int64_t kChunk = 512;
+  static_assert(kChunk % kLanes == 0);
+  const auto phase = [](const T* x) { return reinterpret_cast<uintptr_t>(x) % kAlign; };
+  const uintptr_t ph = phase(p + lo);
+  if (kLanes == 1 || ph % sizeof(T) != 0 || phase(g + lo) != ph || phase(m + lo) != ph || phase(v + lo) != ph ||
+      (target && phase(target + lo) != ph)) {
+    fused_range_expr(p, g, m, v, target, lo, hi, c);
+    return;
+  }
+  const int64_t head = std::min<int64_t>(hi - lo, int64_t((kAlign - ph) % kAlign / sizeof(T)));
+  const int64_t body = lo + head, end = body + (hi - body) / kLanes * kLanes;
+  if (head > 0) fused_range_expr(p, g, m, v, target, lo, body, c);
+  for (int64_t a = body; a < end; a += kChunk) fused_range_expr(p, g, m, v, target, a, std::min(end, a + kChunk), c);
+  if (end < hi) fused_range_expr(p, g, m, v, target, end, hi, c);
+}
+}  // namespace
+
 template <class T>
 void Adam<T>::step_fused(T* p, T* g, double lr, T* target, double tau) {
   ++t_;
-  const T b1 = T(cfg_.beta1), b2 = T(cfg_.beta2), eps = T(cfg_.eps);
-  const T step_size = T(lr / (1.0 - std::pow(cfg_.beta1, double(t_))));
-  const T inv_sqrt_bc2 = T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_))));
-  const T ta = T(1.0 - tau), tb = T(tau);
+  // Rounded to T exactly where the expressions round them.
+  const FusedCoeffs c{cfg_.beta1, cfg_.beta2, cfg_.eps,
+                      double(T(lr / (1.0 - std::pow(cfg_.beta1, double(t_))))),
+                      double(T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_))))),
+                      1.0 - tau, tau};
   T* m = m_.data();
   T* v = v_.data();
   parallel_blocks(int64_t(m_.size()), kBlock, [&](int64_t lo, int64_t hi) {
-    using A = Eigen::Array<T, Eigen::Dynamic, 1>;
-    const Eigen::Index n = hi - lo;
-    Eigen::Map<A> P(p + lo, n), M(m + lo, n), V(v + lo, n), G(g + lo, n);
-    flush_subnormal(G);
-    M = b1 * M + (T(1) - b1) * G;
-    V = b2 * V + (T(1) - b2) * G.square();
-    flush_subnormal(M);
-    flush_subnormal(V);
-    P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
-    G.setZero();
-    if (target) {
-      Eigen::Map<A> Tg(target + lo, n);
-      Tg = ta * Tg + tb * P;
-    }
+    fused_block(p, g, m, v, target, lo, hi, c);
   });
 }
 

@@ -33,9 +33,11 @@ class Adam {
   // One step: p -= lr * mhat / (sqrt(vhat) + eps), with
   // mhat = m / (1 - beta1^t), vhat = v / (1 - beta2^t).
   void step(T* params, const T* grads, double lr);
-  // The same step fused with what the training loop does next, in one pass
-  // over memory: zero the gradients (ready for the next backward) and, when
-  // target != null, Polyak-average it: target = (1 - tau) target + tau params.
+  // The same step fused with what the training loop does next, chunk by
+  // chunk while the arrays sit in L1: zero the gradients (ready for the next
+  // backward) and, when target != null, Polyak-average it: target = (1 - tau)
+  // target + tau params. Its bits are those of the whole-block Eigen passes
+  // it was before (tests/test_adam.cpp keeps them as the reference).
   void step_fused(T* params, T* grads, double lr, T* target = nullptr, double tau = 0.0);
 
   size_t size() const { return m_.size(); }
