@@ -1,4 +1,4 @@
-// bench_sac: SAC gradient updates/s, actor actions/s and the machine's
+// bench_sac: SAC gradient updates/s, actor actions/s, Adam parameters/s and the machine's
 // single-precision GEMM rate, as JSON lines.
 //
 //   build/bench/bench_sac [--quick]
@@ -21,6 +21,7 @@
 #include <tbb/parallel_for.h>
 
 #include "atacom/parallel.hpp"
+#include "train/adam.hpp"
 #include "train/replay_buffer.hpp"
 #include "train/sac.hpp"
 #include "bench_common.hpp"
@@ -122,6 +123,27 @@ void bench_actor_act(int N, int threads) {
   bench::emit({{"bench", "actor_act"}, {"N", N}, {"threads", threads}, {"per_s", calls * N}});
 }
 
+// Adam's fused step (moments, parameters, gradient reset, Polyak target)
+// over n parameters, the size of one SAC critic pair; per_s counts
+// parameters. The gradient is refilled each call with typical magnitudes,
+// none subnormal, so the flush never takes a microcode assist.
+void bench_adam_step(int64_t n, int threads) {
+  set_num_threads(threads);
+  Adam<float> opt(size_t(n), default_adam_config());
+  const size_t len = size_t(n);
+  std::vector<float> p(len), g(len), grad(len), target(len);
+  Rng r(6, 0);
+  for (int64_t i = 0; i < n; ++i) {
+    p[size_t(i)] = target[size_t(i)] = float(r.uniform(-1, 1));
+    grad[size_t(i)] = float(r.uniform(-1e-2, 1e-2));
+  }
+  const double calls = best_rate([&]() {
+    std::copy(grad.begin(), grad.end(), g.begin());
+    opt.step_fused(p.data(), g.data(), 3e-4, target.data(), 1e-3);
+  });
+  bench::emit({{"bench", "adam_step"}, {"N", n}, {"threads", threads}, {"per_s", calls * double(n)}});
+}
+
 // Eigen's float GEMM C = A B, one independent product per thread (Eigen
 // itself runs single-threaded here), aggregate rate.
 void bench_gemm_peak(int m, int k, int n, int threads) {
@@ -153,7 +175,7 @@ int main(int argc, char** argv) {
   std::string only;
   int batch_only = 0, threads_only = 0;
   auto usage = []() {
-    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|gemm_peak] [--batch B] [--threads T]\n"
+    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|adam_step|gemm_peak] [--batch B] [--threads T]\n"
                          "                 [--repeats R] [--window SECONDS]\n");
     return 2;
   };
@@ -164,7 +186,7 @@ int main(int argc, char** argv) {
       window_s = 0.3;
     } else if (!std::strcmp(argv[i], "--only") && has_value) {
       only = argv[++i];
-      if (only != "sac_update" && only != "actor_act" && only != "gemm_peak") return usage();
+      if (only != "sac_update" && only != "actor_act" && only != "adam_step" && only != "gemm_peak") return usage();
     } else if (!std::strcmp(argv[i], "--batch") && has_value) {
       batch_only = std::atoi(argv[++i]);
       if (batch_only < 1 || batch_only > 65536) return usage();
@@ -192,6 +214,8 @@ int main(int argc, char** argv) {
   if (want("actor_act"))
     for (int threads : thread_list)
       for (int N : {1, 1024, 16384}) bench_actor_act(N, threads);
+  if (want("adam_step"))
+    for (int threads : thread_list) bench_adam_step(150000, threads);
   if (want("gemm_peak"))
     for (int threads : thread_list) {
       bench_gemm_peak(64, 256, 256, threads);

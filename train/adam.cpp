@@ -77,8 +77,9 @@ void Adam<T>::step(T* p, const T* g, double lr) {
 }
 
 namespace {
+template <class T>
 struct FusedCoeffs {
-  double b1, b2, eps, step_size, inv_sqrt_bc2, ta, tb;
+  T b1, b2, eps, step_size, inv_sqrt_bc2, ta, tb;
 };
 
 // The fused step on [lo, hi) as Eigen array expressions: the definition of
@@ -87,21 +88,20 @@ struct FusedCoeffs {
 // its sqrt is exact while the packet sqrt (EIGEN_FAST_MATH) is not, so which
 // elements go which way is part of the result.
 template <class T>
-void fused_range_expr(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, const FusedCoeffs& c) {
+void fused_range_expr(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, const FusedCoeffs<T>& c) {
   using A = Eigen::Array<T, Eigen::Dynamic, 1>;
-  const T b1 = T(c.b1), b2 = T(c.b2), eps = T(c.eps), step_size = T(c.step_size), inv_sqrt_bc2 = T(c.inv_sqrt_bc2);
   const Eigen::Index n = hi - lo;
   Eigen::Map<A> P(p + lo, n), M(m + lo, n), V(v + lo, n), G(g + lo, n);
   flush_subnormal(G);
-  M = b1 * M + (T(1) - b1) * G;
-  V = b2 * V + (T(1) - b2) * G.square();
+  M = c.b1 * M + (T(1) - c.b1) * G;
+  V = c.b2 * V + (T(1) - c.b2) * G.square();
   flush_subnormal(M);
   flush_subnormal(V);
-  P -= step_size * M / (V.sqrt() * inv_sqrt_bc2 + eps);
+  P -= c.step_size * M / (V.sqrt() * c.inv_sqrt_bc2 + c.eps);
   G.setZero();
   if (target) {
     Eigen::Map<A> Tg(target + lo, n);
-    Tg = T(c.ta) * Tg + T(c.tb) * P;
+    Tg = c.ta * Tg + c.tb * P;
   }
 }
 
@@ -112,7 +112,7 @@ void fused_range_expr(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi,
 // scalar head and tail are run alone). That needs all five arrays on one
 // alignment phase; otherwise the block runs whole.
 template <class T>
-void fused_block(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, const FusedCoeffs& c) {
+void fused_block(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, const FusedCoeffs<T>& c) {
   using Traits = Eigen::internal::packet_traits<T>;
   // Eigen aligns its packet loops to a whole packet (the packet's size for
   // every float and double packet).
@@ -138,11 +138,9 @@ void fused_block(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, cons
 template <class T>
 void Adam<T>::step_fused(T* p, T* g, double lr, T* target, double tau) {
   ++t_;
-  // Rounded to T exactly where the expressions round them.
-  const FusedCoeffs c{cfg_.beta1, cfg_.beta2, cfg_.eps,
-                      double(T(lr / (1.0 - std::pow(cfg_.beta1, double(t_))))),
-                      double(T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_))))),
-                      1.0 - tau, tau};
+  const FusedCoeffs<T> c{T(cfg_.beta1), T(cfg_.beta2), T(cfg_.eps),
+                         T(lr / (1.0 - std::pow(cfg_.beta1, double(t_)))),
+                         T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_)))), T(1.0 - tau), T(tau)};
   T* m = m_.data();
   T* v = v_.data();
   parallel_blocks(int64_t(m_.size()), kBlock, [&](int64_t lo, int64_t hi) {
