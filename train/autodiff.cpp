@@ -5,12 +5,14 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include <Eigen/Core>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "atacom/parallel.hpp"
+#include "kernels/eigen_exact_gemm.hpp"
 
 namespace atacom {
 
@@ -50,6 +52,16 @@ void for_elems(int64_t n, Fn&& fn) {
 
 void check(bool ok, const char* op, const std::string& what) {
   if (!ok) throw std::invalid_argument(std::string("autodiff ") + op + ": " + what);
+}
+
+// float tiles go to the Eigen-exact kernel where it takes them (the same
+// bits as the Eigen expression each call site falls back to, without the
+// packing); double tiles, used by the finite-difference checks, stay Eigen's.
+template <class T>
+bool exact_tile(int m, int n, int k, const T* a, int64_t a_rs, int64_t a_cs, const T* b, int64_t b_rs, int64_t b_cs,
+                T* c, int64_t ldc, bool relu) {
+  if constexpr (std::is_same_v<T, float>) return eigen_exact_gemm(m, n, k, a, a_rs, a_cs, b, b_rs, b_cs, c, ldc, relu);
+  else return false;
 }
 
 std::string shape(int r, int c) {
@@ -181,9 +193,12 @@ typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups, bool relu)
       if (bv) std::memcpy(row, bv + q * out + c0, sizeof(T) * size_t(nc));
       else std::memset(row, 0, sizeof(T) * size_t(nc));
     }
+    const T* xt = xv + int64_t(r0) * ldx + (shared ? 0 : q * in);
+    const T* wt = wv + int64_t(q) * in * out + c0;
+    if (exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, relu)) return;
     MatMap<T> Y(yt, nr, nc, Eigen::OuterStride<>(ldy));
-    CMatMap<T> X(xv + int64_t(r0) * ldx + (shared ? 0 : q * in), nr, in, Eigen::OuterStride<>(ldx));
-    CMatMap<T> W(wv + int64_t(q) * in * out + c0, in, nc, Eigen::OuterStride<>(out));
+    CMatMap<T> X(xt, nr, in, Eigen::OuterStride<>(ldx));
+    CMatMap<T> W(wt, in, nc, Eigen::OuterStride<>(out));
     Y.noalias() += X * W;
     if (relu) relu_rows<T>(yt, ldy, nr, nc);
   });
@@ -221,11 +236,15 @@ void Tape<T>::back_linear(const Node& y) {
       const int q = t / (rb * xcb), r = (t / xcb) % rb, c = t % xcb;
       const int r0 = r * kRowBlock, nr = std::min(kRowBlock, B - r0);
       const int c0 = c * kColBlock, nc = std::min(kColBlock, in - c0);
-      MatMap<T> DX(x.g + int64_t(r0) * ldx + q * in + c0, nr, nc, Eigen::OuterStride<>(ldx));
+      T* dxt = x.g + int64_t(r0) * ldx + q * in + c0;
+      MatMap<T> DX(dxt, nr, nc, Eigen::OuterStride<>(ldx));
       const int q_begin = shared ? 0 : q, q_end = shared ? groups : q + 1;
       for (int g = q_begin; g < q_end; ++g) {
-        CMatMap<T> DY(y.g + int64_t(r0) * ldy + g * out, nr, out, Eigen::OuterStride<>(ldy));
-        CMatMap<T> W(w.v + (int64_t(g) * in + c0) * out, nc, out, Eigen::OuterStride<>(out));
+        const T* dyt = y.g + int64_t(r0) * ldy + g * out;
+        const T* wt = w.v + (int64_t(g) * in + c0) * out;
+        if (exact_tile<T>(nr, nc, out, dyt, ldy, 1, wt, 1, out, dxt, ldx, false)) continue;
+        CMatMap<T> DY(dyt, nr, out, Eigen::OuterStride<>(ldy));
+        CMatMap<T> W(wt, nc, out, Eigen::OuterStride<>(out));
         DX.noalias() += DY * W.transpose();
       }
       return;
@@ -234,10 +253,15 @@ void Tape<T>::back_linear(const Node& y) {
     const int q = t / wcb, c = t % wcb;
     const int c0 = c * kColBlock, nc = std::min(kColBlock, out - c0);
     if (dw) {
-      MatMap<T> DW(w.g + int64_t(q) * in * out + c0, in, nc, Eigen::OuterStride<>(out));
-      CMatMap<T> X(x.v + (shared ? 0 : q * in), B, in, Eigen::OuterStride<>(ldx));
-      CMatMap<T> DY(y.g + q * out + c0, B, nc, Eigen::OuterStride<>(ldy));
-      DW.noalias() += X.transpose() * DY;
+      T* dwt = w.g + int64_t(q) * in * out + c0;
+      const T* xt = x.v + (shared ? 0 : q * in);
+      const T* dyt = y.g + q * out + c0;
+      if (!exact_tile<T>(in, nc, B, xt, 1, ldx, dyt, ldy, 1, dwt, out, false)) {
+        MatMap<T> DW(dwt, in, nc, Eigen::OuterStride<>(out));
+        CMatMap<T> X(xt, B, in, Eigen::OuterStride<>(ldx));
+        CMatMap<T> DY(dyt, B, nc, Eigen::OuterStride<>(ldy));
+        DW.noalias() += X.transpose() * DY;
+      }
     }
     if (db) {
       T* dbv = b->g + q * out + c0;
