@@ -23,10 +23,11 @@ static_assert(Traits::mr == 48 && Traits::nr == 4 && Traits::LhsProgress == 16,
 constexpr Index kMaxStripDepth = 512;
 
 // One MR x (16 NP) block of C over kd steps of k: accumulators from zero,
-// one FMA per step in k order, then C + acc (Eigen's pmadd(acc, 1, C)).
+// one FMA per step in k order, then C + acc (Eigen's pmadd(acc, 1, C)),
+// where C is read from init (one row for all) when given.
 template <int MR, int NP>
 inline void micro(int kd, const float* a, int64_t a_rs, int64_t a_cs, const float* b, int64_t ldb, float* c,
-                  int64_t ldc, bool relu) {
+                  int64_t ldc, const float* init, bool relu) {
   __m512 acc[MR][NP];
   for (int r = 0; r < MR; ++r)
     for (int q = 0; q < NP; ++q) acc[r][q] = _mm512_setzero_ps();
@@ -42,7 +43,7 @@ inline void micro(int kd, const float* a, int64_t a_rs, int64_t a_cs, const floa
   for (int r = 0; r < MR; ++r)
     for (int q = 0; q < NP; ++q) {
       float* cp = c + r * ldc + 16 * q;
-      __m512 v = _mm512_add_ps(_mm512_loadu_ps(cp), acc[r][q]);
+      __m512 v = _mm512_add_ps(_mm512_loadu_ps(init ? init + 16 * q : cp), acc[r][q]);
       // max(v, 0) returns its second operand for NaN and for -0: the bits of v > 0 ? v : 0.
       if (relu) v = _mm512_max_ps(v, zero);
       _mm512_storeu_ps(cp, v);
@@ -51,11 +52,11 @@ inline void micro(int kd, const float* a, int64_t a_rs, int64_t a_cs, const floa
 
 template <int NP>
 void strip(int m, int kd, const float* a, int64_t a_rs, int64_t a_cs, const float* b, int64_t ldb, float* c,
-           int64_t ldc, bool relu) {
+           int64_t ldc, const float* init, bool relu) {
   int i = 0;
-  for (; i + 8 <= m; i += 8) micro<8, NP>(kd, a + i * a_rs, a_rs, a_cs, b, ldb, c + i * ldc, ldc, relu);
-  for (; i + 4 <= m; i += 4) micro<4, NP>(kd, a + i * a_rs, a_rs, a_cs, b, ldb, c + i * ldc, ldc, relu);
-  for (; i < m; ++i) micro<1, NP>(kd, a + i * a_rs, a_rs, a_cs, b, ldb, c + i * ldc, ldc, relu);
+  for (; i + 8 <= m; i += 8) micro<8, NP>(kd, a + i * a_rs, a_rs, a_cs, b, ldb, c + i * ldc, ldc, init, relu);
+  for (; i + 4 <= m; i += 4) micro<4, NP>(kd, a + i * a_rs, a_rs, a_cs, b, ldb, c + i * ldc, ldc, init, relu);
+  for (; i < m; ++i) micro<1, NP>(kd, a + i * a_rs, a_rs, a_cs, b, ldb, c + i * ldc, ldc, init, relu);
 }
 
 // Eigen's PacketBlock of __m512 drops the vector type's alignment attribute
@@ -81,12 +82,13 @@ void transpose_strip(const float* src, int64_t ld, int kd, int w, float* dst) {
 // C += A B in Eigen's depth blocks, 48-column strips of C at a time.
 template <bool Transposed>
 void run(int m, int n, int k, int kc, const float* a, int64_t a_rs, int64_t a_cs, const float* b, int64_t b_rs,
-         int64_t b_cs, float* c, int64_t ldc, bool relu) {
+         int64_t b_cs, float* c, int64_t ldc, const float* c_init, bool relu) {
   // A transposed B is copied strip by strip; a row-major one is read in place.
   alignas(64) float panel[Transposed ? kMaxStripDepth * 48 : 1];
   for (int k0 = 0; k0 < k; k0 += kc) {
     const int kd = std::min(kc, k - k0);
     const bool last = k0 + kd == k;
+    const float* init = k0 == 0 ? c_init : nullptr;  // later depth blocks add to C
     const float* ak = a + k0 * a_cs;
     for (int j0 = 0; j0 < n;) {
       const int w = n - j0 >= 48 ? 48 : n - j0 >= 32 ? 32 : 16;  // n is a multiple of 16 here
@@ -98,9 +100,10 @@ void run(int m, int n, int k, int kc, const float* a, int64_t a_rs, int64_t a_cs
         ldb = w;
       }
       float* cs = c + j0;
-      if (w == 48) strip<3>(m, kd, ak, a_rs, a_cs, bs, ldb, cs, ldc, relu && last);
-      else if (w == 32) strip<2>(m, kd, ak, a_rs, a_cs, bs, ldb, cs, ldc, relu && last);
-      else strip<1>(m, kd, ak, a_rs, a_cs, bs, ldb, cs, ldc, relu && last);
+      const float* is = init ? init + j0 : nullptr;
+      if (w == 48) strip<3>(m, kd, ak, a_rs, a_cs, bs, ldb, cs, ldc, is, relu && last);
+      else if (w == 32) strip<2>(m, kd, ak, a_rs, a_cs, bs, ldb, cs, ldc, is, relu && last);
+      else strip<1>(m, kd, ak, a_rs, a_cs, bs, ldb, cs, ldc, is, relu && last);
       j0 += w;
     }
   }
@@ -113,7 +116,7 @@ bool sequential_panels(Index rows) { return rows % 48 == 0 || rows % 48 == 32; }
 #endif
 
 bool eigen_exact_gemm(int m, int n, int k, const float* a, int64_t a_rs, int64_t a_cs, const float* b, int64_t b_rs,
-                      int64_t b_cs, float* c, int64_t ldc, bool relu) {
+                      int64_t b_cs, float* c, int64_t ldc, const float* c_init, bool relu) {
 #if defined(EIGEN_VECTORIZE_AVX512)
   // Eigen's dispatch: tiny products go coefficient-wise, a single row or
   // column of C goes to GEMV; neither is this kernel.
@@ -125,12 +128,12 @@ bool eigen_exact_gemm(int m, int n, int k, const float* a, int64_t a_rs, int64_t
   Eigen::internal::computeProductBlockingSizes<float, float, 1>(kc, mc, nc, Index(1));
   if (!sequential_panels(std::min<Index>(mc, n)) || (n % mc != 0 && !sequential_panels(n % mc))) return false;
   if (b_cs != 1 && kc > kMaxStripDepth) return false;
-  if (b_cs == 1) run<false>(m, n, k, int(kc), a, a_rs, a_cs, b, b_rs, b_cs, c, ldc, relu);
-  else run<true>(m, n, k, int(kc), a, a_rs, a_cs, b, b_rs, b_cs, c, ldc, relu);
+  if (b_cs == 1) run<false>(m, n, k, int(kc), a, a_rs, a_cs, b, b_rs, b_cs, c, ldc, c_init, relu);
+  else run<true>(m, n, k, int(kc), a, a_rs, a_cs, b, b_rs, b_cs, c, ldc, c_init, relu);
   return true;
 #else
   (void)m; (void)n; (void)k; (void)a; (void)a_rs; (void)a_cs; (void)b; (void)b_rs; (void)b_cs; (void)c; (void)ldc;
-  (void)relu;
+  (void)c_init; (void)relu;
   return false;
 #endif
 }

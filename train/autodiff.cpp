@@ -59,8 +59,9 @@ void check(bool ok, const char* op, const std::string& what) {
 // packing); double tiles, used by the finite-difference checks, stay Eigen's.
 template <class T>
 bool exact_tile(int m, int n, int k, const T* a, int64_t a_rs, int64_t a_cs, const T* b, int64_t b_rs, int64_t b_cs,
-                T* c, int64_t ldc, bool relu) {
-  if constexpr (std::is_same_v<T, float>) return eigen_exact_gemm(m, n, k, a, a_rs, a_cs, b, b_rs, b_cs, c, ldc, relu);
+                T* c, int64_t ldc, const T* c_init, bool relu) {
+  if constexpr (std::is_same_v<T, float>)
+    return eigen_exact_gemm(m, n, k, a, a_rs, a_cs, b, b_rs, b_cs, c, ldc, c_init, relu);
   else return false;
 }
 
@@ -188,14 +189,17 @@ typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups, bool relu)
     const int r0 = r * kRowBlock, nr = std::min(kRowBlock, B - r0);
     const int c0 = c * kColBlock, nc = std::min(kColBlock, out - c0);
     T* yt = yv + int64_t(r0) * ldy + q * out + c0;
-    for (int i = 0; i < nr; ++i) {
-      T* row = yt + int64_t(i) * ldy;
-      if (bv) std::memcpy(row, bv + q * out + c0, sizeof(T) * size_t(nc));
-      else std::memset(row, 0, sizeof(T) * size_t(nc));
-    }
     const T* xt = xv + int64_t(r0) * ldx + (shared ? 0 : q * in);
     const T* wt = wv + int64_t(q) * in * out + c0;
-    if (exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, relu)) return;
+    const T* bt = bv ? bv + q * out + c0 : nullptr;
+    // With a bias the kernel starts each row from it (the bits of copying it in first).
+    if (bt && exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, bt, relu)) return;
+    for (int i = 0; i < nr; ++i) {
+      T* row = yt + int64_t(i) * ldy;
+      if (bt) std::memcpy(row, bt, sizeof(T) * size_t(nc));
+      else std::memset(row, 0, sizeof(T) * size_t(nc));
+    }
+    if (!bt && exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, nullptr, relu)) return;
     MatMap<T> Y(yt, nr, nc, Eigen::OuterStride<>(ldy));
     CMatMap<T> X(xt, nr, in, Eigen::OuterStride<>(ldx));
     CMatMap<T> W(wt, in, nc, Eigen::OuterStride<>(out));
@@ -242,7 +246,7 @@ void Tape<T>::back_linear(const Node& y) {
       for (int g = q_begin; g < q_end; ++g) {
         const T* dyt = y.g + int64_t(r0) * ldy + g * out;
         const T* wt = w.v + (int64_t(g) * in + c0) * out;
-        if (exact_tile<T>(nr, nc, out, dyt, ldy, 1, wt, 1, out, dxt, ldx, false)) continue;
+        if (exact_tile<T>(nr, nc, out, dyt, ldy, 1, wt, 1, out, dxt, ldx, nullptr, false)) continue;
         CMatMap<T> DY(dyt, nr, out, Eigen::OuterStride<>(ldy));
         CMatMap<T> W(wt, nc, out, Eigen::OuterStride<>(out));
         DX.noalias() += DY * W.transpose();
@@ -256,7 +260,7 @@ void Tape<T>::back_linear(const Node& y) {
       T* dwt = w.g + int64_t(q) * in * out + c0;
       const T* xt = x.v + (shared ? 0 : q * in);
       const T* dyt = y.g + q * out + c0;
-      if (!exact_tile<T>(in, nc, B, xt, 1, ldx, dyt, ldy, 1, dwt, out, false)) {
+      if (!exact_tile<T>(in, nc, B, xt, 1, ldx, dyt, ldy, 1, dwt, out, nullptr, false)) {
         MatMap<T> DW(dwt, in, nc, Eigen::OuterStride<>(out));
         CMatMap<T> X(xt, B, in, Eigen::OuterStride<>(ldx));
         CMatMap<T> DY(dyt, B, nc, Eigen::OuterStride<>(ldy));
