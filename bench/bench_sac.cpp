@@ -1,5 +1,5 @@
-// bench_sac: SAC gradient updates/s, actor actions/s, Adam parameters/s and the machine's
-// single-precision GEMM rate, as JSON lines.
+// bench_sac: SAC gradient updates/s, actor actions/s, Adam parameters/s, the machine's
+// single-precision GEMM rate and its FMA peak, as JSON lines.
 //
 //   build/bench/bench_sac [--quick]
 //
@@ -168,6 +168,34 @@ void bench_gemm_peak(int m, int k, int n, int threads) {
                {"gflops", per_s * inner * 2.0 * m * k * n * 1e-9}});
 }
 
+// The cores' float32 FMA peak: 12 independent multiply-add chains per thread
+// on Eigen's widest float packet, 2 FLOP per lane. `gflops` is per thread, so
+// it compares with gemm_peak's and with sac_update's per-core rate.
+void bench_fma_peak(int threads) {
+  set_num_threads(threads);
+  namespace ei = Eigen::internal;
+  using P = ei::packet_traits<float>::type;
+  constexpr int kLanes = ei::packet_traits<float>::size, kChains = 12;
+  constexpr long kSteps = 1 << 20;
+  std::vector<float> sink(size_t(threads), 0.0f);
+  auto run = [&]() {
+    tbb::parallel_for(0, threads, [&](int t) {
+      P acc[kChains];
+      for (int c = 0; c < kChains; ++c) acc[c] = ei::pset1<P>(1.0f + 1e-7f * float(c + t));
+      const P mul = ei::pset1<P>(0.9999999f), add = ei::pset1<P>(1e-7f);
+      for (long i = 0; i < kSteps; ++i)
+        for (int c = 0; c < kChains; ++c) acc[c] = ei::pmadd(acc[c], mul, add);
+      float s = 0;
+      for (int c = 0; c < kChains; ++c) s += ei::predux(acc[c]);
+      sink[size_t(t)] = s;  // keeps the chains live
+    });
+  };
+  const double per_s = best_rate(run);
+  const double flops_per_thread = double(kSteps) * kChains * kLanes * 2.0;
+  bench::emit({{"bench", "fma_peak"}, {"threads", threads}, {"lanes", kLanes}, {"per_s", per_s * flops_per_thread * threads},
+               {"gflops", per_s * flops_per_thread * 1e-9}});
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -175,8 +203,8 @@ int main(int argc, char** argv) {
   std::string only;
   int batch_only = 0, threads_only = 0;
   auto usage = []() {
-    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|adam_step|gemm_peak] [--batch B] [--threads T]\n"
-                         "                 [--repeats R] [--window SECONDS]\n");
+    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|adam_step|gemm_peak|fma_peak] [--batch B]\n"
+                         "                 [--threads T] [--repeats R] [--window SECONDS]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -186,7 +214,9 @@ int main(int argc, char** argv) {
       window_s = 0.3;
     } else if (!std::strcmp(argv[i], "--only") && has_value) {
       only = argv[++i];
-      if (only != "sac_update" && only != "actor_act" && only != "adam_step" && only != "gemm_peak") return usage();
+      if (only != "sac_update" && only != "actor_act" && only != "adam_step" && only != "gemm_peak" &&
+          only != "fma_peak")
+        return usage();
     } else if (!std::strcmp(argv[i], "--batch") && has_value) {
       batch_only = std::atoi(argv[++i]);
       if (batch_only < 1 || batch_only > 65536) return usage();
@@ -223,5 +253,7 @@ int main(int argc, char** argv) {
       bench_gemm_peak(64, 27, 256, threads);
       bench_gemm_peak(1024, 1024, 1024, threads);
     }
+  if (want("fma_peak"))
+    for (int threads : thread_list) bench_fma_peak(threads);
   return 0;
 }
