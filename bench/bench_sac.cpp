@@ -21,6 +21,7 @@
 #include <tbb/parallel_for.h>
 
 #include "atacom/parallel.hpp"
+#include "kernels/eigen_exact_gemm.hpp"
 #include "train/adam.hpp"
 #include "train/replay_buffer.hpp"
 #include "train/sac.hpp"
@@ -168,6 +169,44 @@ void bench_gemm_peak(int m, int k, int n, int threads) {
                {"gflops", per_s * inner * 2.0 * m * k * n * 1e-9}});
 }
 
+// One GEMM as the tape runs it, in 128-column tiles on one thread, through
+// the Eigen-exact kernel and through the Eigen expression it replaces (same
+// bits): forward Y += X W (m x k times k x n), dW += X^T dY (k rows of X
+// and dY, n columns of dW), dX += dY W^T (W is n x k). `gflops` per call.
+void bench_gemm_tile(const char* form, int m, int k, int n) {
+  set_num_threads(1);
+  using M = RowMat<float>;
+  const bool tn = !std::strcmp(form, "dw"), nt = !std::strcmp(form, "dx");
+  const M a = tn ? M::Random(k, m) : M::Random(m, k), b = nt ? M::Random(n, k) : M::Random(k, n);
+  M c = M::Zero(m, n);
+  const int64_t lda = a.cols(), ldb = b.cols();
+  for (const bool exact : {true, false}) {
+    const double per_s = best_rate([&]() {
+      for (int c0 = 0; c0 < n; c0 += 128) {
+        const int nc = std::min(128, n - c0);
+        float* ct = c.data() + c0;
+        MatMap<float> C(ct, m, nc, Eigen::OuterStride<>(n));
+        if (tn) {
+          if (!exact || !eigen_exact_gemm(m, nc, k, a.data(), 1, lda, b.data() + c0, ldb, 1, ct, n, nullptr, false))
+            C.noalias() += CMatMap<float>(a.data(), k, m, Eigen::OuterStride<>(lda)).transpose() *
+                           CMatMap<float>(b.data() + c0, k, nc, Eigen::OuterStride<>(ldb));
+        } else if (nt) {
+          const float* bt = b.data() + int64_t(c0) * ldb;
+          if (!exact || !eigen_exact_gemm(m, nc, k, a.data(), lda, 1, bt, 1, ldb, ct, n, nullptr, false))
+            C.noalias() += CMatMap<float>(a.data(), m, k, Eigen::OuterStride<>(lda)) *
+                           CMatMap<float>(bt, nc, k, Eigen::OuterStride<>(ldb)).transpose();
+        } else {
+          if (!exact || !eigen_exact_gemm(m, nc, k, a.data(), lda, 1, b.data() + c0, ldb, 1, ct, n, nullptr, false))
+            C.noalias() += CMatMap<float>(a.data(), m, k, Eigen::OuterStride<>(lda)) *
+                           CMatMap<float>(b.data() + c0, k, nc, Eigen::OuterStride<>(ldb));
+        }
+      }
+    });
+    bench::emit({{"bench", "gemm_tile"}, {"form", form}, {"m", m}, {"k", k}, {"n", n}, {"threads", 1},
+                 {"kernel", exact ? "exact" : "eigen"}, {"per_s", per_s}, {"gflops", per_s * 2.0 * m * k * n * 1e-9}});
+  }
+}
+
 // The cores' float32 FMA peak: 12 independent multiply-add chains per thread
 // on Eigen's widest float packet, 2 FLOP per lane. `gflops` is per thread, so
 // it compares with gemm_peak's and with sac_update's per-core rate.
@@ -203,8 +242,8 @@ int main(int argc, char** argv) {
   std::string only;
   int batch_only = 0, threads_only = 0;
   auto usage = []() {
-    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|adam_step|gemm_peak|fma_peak] [--batch B]\n"
-                         "                 [--threads T] [--repeats R] [--window SECONDS]\n");
+    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|adam_step|gemm_peak|gemm_tile|fma_peak]\n"
+                         "                 [--batch B] [--threads T] [--repeats R] [--window SECONDS]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -215,7 +254,7 @@ int main(int argc, char** argv) {
     } else if (!std::strcmp(argv[i], "--only") && has_value) {
       only = argv[++i];
       if (only != "sac_update" && only != "actor_act" && only != "adam_step" && only != "gemm_peak" &&
-          only != "fma_peak")
+          only != "gemm_tile" && only != "fma_peak")
         return usage();
     } else if (!std::strcmp(argv[i], "--batch") && has_value) {
       batch_only = std::atoi(argv[++i]);
@@ -253,6 +292,12 @@ int main(int argc, char** argv) {
       bench_gemm_peak(64, 27, 256, threads);
       bench_gemm_peak(1024, 1024, 1024, threads);
     }
+  if (want("gemm_tile")) {
+    // The update's 256x256 hidden layer at batch 64: forward, dW, dX.
+    bench_gemm_tile("forward", 64, 256, 256);
+    bench_gemm_tile("dw", 256, 64, 256);
+    bench_gemm_tile("dx", 64, 256, 256);
+  }
   if (want("fma_peak"))
     for (int threads : thread_list) bench_fma_peak(threads);
   return 0;

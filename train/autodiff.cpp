@@ -191,15 +191,12 @@ typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups, bool relu)
     T* yt = yv + int64_t(r0) * ldy + q * out + c0;
     const T* xt = xv + int64_t(r0) * ldx + (shared ? 0 : q * in);
     const T* wt = wv + int64_t(q) * in * out + c0;
-    const T* bt = bv ? bv + q * out + c0 : nullptr;
-    // With a bias the kernel starts each row from it (the bits of copying it in first).
-    if (bt && exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, bt, relu)) return;
-    for (int i = 0; i < nr; ++i) {
-      T* row = yt + int64_t(i) * ldy;
-      if (bt) std::memcpy(row, bt, sizeof(T) * size_t(nc));
-      else std::memset(row, 0, sizeof(T) * size_t(nc));
-    }
-    if (!bt && exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, nullptr, relu)) return;
+    // Every row starts as the bias (or zeros); the kernel reads it in place,
+    // the Eigen fallback gets it copied in first: the same bits either way.
+    static constexpr T kZeroRow[kColBlock] = {};
+    const T* init = bv ? bv + q * out + c0 : kZeroRow;
+    if (exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, init, relu)) return;
+    for (int i = 0; i < nr; ++i) std::memcpy(yt + int64_t(i) * ldy, init, sizeof(T) * size_t(nc));
     MatMap<T> Y(yt, nr, nc, Eigen::OuterStride<>(ldy));
     CMatMap<T> X(xt, nr, in, Eigen::OuterStride<>(ldx));
     CMatMap<T> W(wt, in, nc, Eigen::OuterStride<>(out));
