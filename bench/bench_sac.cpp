@@ -173,6 +173,10 @@ void bench_gemm_peak(int m, int k, int n, int threads) {
 // the Eigen-exact kernel and through the Eigen expression it replaces (same
 // bits): forward Y += X W (m x k times k x n), dW += X^T dY (k rows of X
 // and dY, n columns of dW), dX += dY W^T (W is n x k). `gflops` per call.
+// `cache`: "warm" repeats the call with its operands in cache; "cold" sweeps
+// 8 MB through the caches before each call (not timed), as the update's
+// other work does; "cold_a", "cold_b", "cold_c" read every operand but that
+// one back in after the sweep, to show which one costs.
 void bench_gemm_tile(const char* form, int m, int k, int n) {
   set_num_threads(1);
   using M = RowMat<float>;
@@ -180,8 +184,13 @@ void bench_gemm_tile(const char* form, int m, int k, int n) {
   const M a = tn ? M::Random(k, m) : M::Random(m, k), b = nt ? M::Random(n, k) : M::Random(k, n);
   M c = M::Zero(m, n);
   const int64_t lda = a.cols(), ldb = b.cols();
+  std::vector<float> sweep(size_t(8) << 18, 1.0f);  // 8 MB: more than L2, as the update's working set
+  float sink = 0;
+  auto touch = [&sink](const float* x, size_t len) {  // one read per cache line
+    for (size_t i = 0; i < len; i += 16) sink += x[i];
+  };
   for (const bool exact : {true, false}) {
-    const double per_s = best_rate([&]() {
+    auto call = [&]() {
       for (int c0 = 0; c0 < n; c0 += 128) {
         const int nc = std::min(128, n - c0);
         float* ct = c.data() + c0;
@@ -201,10 +210,34 @@ void bench_gemm_tile(const char* form, int m, int k, int n) {
                            CMatMap<float>(b.data() + c0, k, nc, Eigen::OuterStride<>(ldb));
         }
       }
-    });
-    bench::emit({{"bench", "gemm_tile"}, {"form", form}, {"m", m}, {"k", k}, {"n", n}, {"threads", 1},
-                 {"kernel", exact ? "exact" : "eigen"}, {"per_s", per_s}, {"gflops", per_s * 2.0 * m * k * n * 1e-9}});
+    };
+    for (const char* cache : {"warm", "cold", "cold_a", "cold_b", "cold_c"}) {
+      double per_s = 0;
+      if (!std::strcmp(cache, "warm")) {
+        per_s = best_rate(call);
+      } else {
+        const char cold = cache[4] == '_' ? cache[5] : 0;  // the one operand left cold, or 0 for all
+        const int calls = repeats * 200;
+        double timed = 0;
+        for (int i = 0; i < calls; ++i) {
+          for (size_t j = 0; j < sweep.size(); j += 16) sweep[j] += 1.0f;
+          if (cold) {
+            if (cold != 'a') touch(a.data(), size_t(a.size()));
+            if (cold != 'b') touch(b.data(), size_t(b.size()));
+            if (cold != 'c') touch(c.data(), size_t(c.size()));
+          }
+          const auto t0 = Clock::now();
+          call();
+          timed += std::chrono::duration<double>(Clock::now() - t0).count();
+        }
+        per_s = calls / timed;
+      }
+      bench::emit({{"bench", "gemm_tile"}, {"form", form}, {"m", m}, {"k", k}, {"n", n}, {"threads", 1},
+                   {"kernel", exact ? "exact" : "eigen"}, {"cache", cache}, {"per_s", per_s},
+                   {"gflops", per_s * 2.0 * m * k * n * 1e-9}});
+    }
   }
+  if (sink == 12345.0f) std::fprintf(stderr, " ");  // keeps the reads
 }
 
 // The cores' float32 FMA peak: 12 independent multiply-add chains per thread
