@@ -3,13 +3,17 @@
 // Networks: twin Q critics as one 2-member ensemble Mlp over concat(obs, a)
 // with a Polyak-averaged target copy; a tanh-squashed Gaussian actor, one Mlp
 // with 2 * act_dim outputs (mean, log-std clamped to [log_std_min,
-// log_std_max]). One update (in the order of the paper's code):
+// log_std_max]). One update:
 //   1. actor and temperature (once the replay holds more than `warmup`):
 //      L_pi = mean(alpha log pi(a~|s) - min_i Q_i(s, a~)),
 //      L_alpha = -log_alpha * mean(log pi + target_entropy)
 //   2. critics: y = r + gamma (1 - terminated) (min_i Q'_i(s', a') - alpha log pi(a'|s')),
 //      L_Q = sum_i mean((Q_i(s, a) - y)^2); truncation still bootstraps.
-//   3. target critics: Polyak with tau.
+//   3. Adam steps; target critics: Polyak with tau.
+// Both gradients are taken at the parameters before this update's steps (so
+// the two phases run concurrently): a' and alpha in 2. come from the actor
+// and temperature before step 1's change. MushroomRL's SAC (the paper's)
+// steps the actor and alpha first and draws a' from the stepped actor.
 // Actions are in [-1, 1]^act_dim (the env contract). Observations reaching the
 // agent are already normalised by the trainer when obs_norm is on.
 #pragma once
