@@ -211,20 +211,22 @@ void bench_gemm_tile(const char* form, int m, int k, int n) {
         }
       }
     };
-    for (const char* cache : {"warm", "cold", "cold_a", "cold_b", "cold_c"}) {
+    // cold: the operand left cold after the sweep ('*' all of them); warm: no sweep.
+    struct Cache { const char* name; char cold; };
+    for (const Cache cache : {Cache{"warm", 0}, Cache{"cold", '*'}, Cache{"cold_a", 'a'}, Cache{"cold_b", 'b'},
+                              Cache{"cold_c", 'c'}}) {
       double per_s = 0;
-      if (!std::strcmp(cache, "warm")) {
+      if (!cache.cold) {
         per_s = best_rate(call);
       } else {
-        const char cold = cache[4] == '_' ? cache[5] : 0;  // the one operand left cold, or 0 for all
         const int calls = repeats * 200;
         double timed = 0;
         for (int i = 0; i < calls; ++i) {
           for (size_t j = 0; j < sweep.size(); j += 16) sweep[j] += 1.0f;
-          if (cold) {
-            if (cold != 'a') touch(a.data(), size_t(a.size()));
-            if (cold != 'b') touch(b.data(), size_t(b.size()));
-            if (cold != 'c') touch(c.data(), size_t(c.size()));
+          if (cache.cold != '*') {
+            if (cache.cold != 'a') touch(a.data(), size_t(a.size()));
+            if (cache.cold != 'b') touch(b.data(), size_t(b.size()));
+            if (cache.cold != 'c') touch(c.data(), size_t(c.size()));
           }
           const auto t0 = Clock::now();
           call();
@@ -233,7 +235,7 @@ void bench_gemm_tile(const char* form, int m, int k, int n) {
         per_s = calls / timed;
       }
       bench::emit({{"bench", "gemm_tile"}, {"form", form}, {"m", m}, {"k", k}, {"n", n}, {"threads", 1},
-                   {"kernel", exact ? "exact" : "eigen"}, {"cache", cache}, {"per_s", per_s},
+                   {"kernel", exact ? "exact" : "eigen"}, {"cache", cache.name}, {"per_s", per_s},
                    {"gflops", per_s * 2.0 * m * k * n * 1e-9}});
     }
   }

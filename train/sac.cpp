@@ -172,7 +172,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
 
   // Set by the critic phase once it has read the actor (its next-state policy).
   std::atomic<bool> actor_read{false};
-  bool actor_stepped = false;
+  bool actor_stepped = false;  // the actor branch has stepped the actor already
 
   // Actor phase: gradient of L_pi at the current actor, critics and alpha.
   // Reads critic parameters, writes only actor gradients.
@@ -225,7 +225,6 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
   auto actor_step = [&]() {
     if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
     actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
-    actor_stepped = true;
   };
   auto critic_step = [&]() {
     if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
@@ -236,13 +235,16 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
   // the same bits as running them one after the other. The critic phase is
   // the longer one; when the actor phase ends after the critic phase has
   // read the actor, the actor step runs at once, in the time the actor's
-  // thread would wait at the join (+3 % updates/s on 2 cores). Otherwise (the
-  // critic phase started late) it runs after the join. Either way it follows
-  // every read of the actor parameters, so the bits are the same.
+  // thread would wait at the join (bench/README.md, "One update's critical
+  // path"). Otherwise (the critic phase started late) it runs after the
+  // join. Either way it follows every read of the actor parameters, so the
+  // bits are the same.
   auto actor_branch = [&]() {
     actor_phase();
-    if (actor_read.load(std::memory_order_acquire) && std::isfinite(st.actor_loss) && std::isfinite(mean_logp))
+    if (actor_read.load(std::memory_order_acquire) && std::isfinite(st.actor_loss) && std::isfinite(mean_logp)) {
       actor_step();
+      actor_stepped = true;
+    }
   };
   if (update_actor) tbb::parallel_invoke(actor_branch, critic_phase);
   else critic_phase();
