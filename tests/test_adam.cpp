@@ -102,16 +102,27 @@ T* same_phase(std::vector<T>& buf, const T* like) {
   return buf.data() + (phase(like) + per_line - phase(buf.data())) % per_line;
 }
 
+// A view into buf whose address is `elems` elements past a 64-byte boundary.
+template <class T>
+T* at_phase(std::vector<T>& buf, size_t elems) {
+  const size_t per_line = 64 / sizeof(T);
+  const size_t phase = (reinterpret_cast<uintptr_t>(buf.data()) % 64) / sizeof(T);
+  return buf.data() + (elems % per_line + per_line - phase) % per_line;
+}
+
 template <class T>
 void check_fused_bits() {
   // The Eigen passes' bits depend on each array's 64-byte phase, so the
   // reference runs on arrays of the same phases as the tested ones. Phases:
-  // all equal (the chunked path) and one off (the fallback); sizes cross
-  // block and packet boundaries; gradients reach below the smallest normal.
+  // all on the moments' phase (64-byte aligned); g one element off; p, g
+  // and target aligned (SAC's layout); and p, g, target three phases apart.
+  // Sizes cross chunk, block and packet boundaries; gradients reach below
+  // the smallest normal.
   atacom::Rng r(7, 0);
-  for (const int64_t n : {int64_t(5), int64_t(40000), int64_t(3 * 16384 + 7)})
-    for (int shift = 0; shift < 6; ++shift) {
-      const bool with_target = shift % 2 == 0, mixed = shift >= 4;
+  for (const int64_t n : {int64_t(5), int64_t(600), int64_t(40000), int64_t(3 * 16384 + 7)})
+    for (int shift = 0; shift < 10; ++shift) {
+      const bool with_target = shift % 2 == 0, mixed = shift >= 4 && shift < 6;
+      const int fixed = shift >= 6 ? (shift >= 8 ? 2 : 1) : 0;  // 1: p, g, t aligned; 2: p, g, t on phases 3, 7, 11
       atacom::Adam<T> opt(size_t(n), atacom::default_adam_config());
       const T* m_like = opt.first_moment().data();
       std::vector<T> bp(size_t(n + 64)), bg(bp.size()), bt(bp.size()), rp(bp.size()), rg(bp.size()), rt(bp.size()),
@@ -121,6 +132,11 @@ void check_fused_bits() {
       T* p = same_phase(bp, m_like) + shift / 2 * (64 / sizeof(T));
       T* g = same_phase(bg, m_like) + (mixed ? 1 : 0);
       T* t = same_phase(bt, m_like);
+      if (fixed) {
+        p = at_phase(bp, fixed == 1 ? 0 : 3);
+        g = at_phase(bg, fixed == 1 ? 0 : 7);
+        t = at_phase(bt, fixed == 1 ? 0 : 11);
+      }
       T* p2 = same_phase(rp, p);
       T* g2 = same_phase(rg, g);
       T* t2 = same_phase(rt, t);
@@ -147,7 +163,50 @@ void check_fused_bits() {
       CHECK(std::memcmp(opt.second_moment().data(), v2, bytes) == 0);
     }
 }
+
+// The moments' phase does not reach the result: only the parameter pass
+// (the one with the sqrt) differs between Eigen's scalar and packet paths,
+// and its destination is p. So aligning the moments (Adam allocates them on
+// 64 bytes) kept the bits of runs made when they started 16 bytes into a page.
+template <class T>
+void check_moment_phase_free() {
+  const int64_t n = 3 * 16384 + 7;
+  const size_t len = size_t(n + 64);
+  std::vector<T> bp(len), bg(len), bt(len);
+  std::vector<T> p_ref, t_ref, m_ref, v_ref;
+  for (int mphase = 0; mphase < 16; mphase += 3) {
+    std::vector<T> bm(len, T(0)), bv(len, T(0));
+    atacom::Rng rr(11, 1);
+    T* p = at_phase(bp, 0);
+    T* g = at_phase(bg, 0);
+    T* t = at_phase(bt, 0);
+    T* m = at_phase(bm, size_t(mphase));
+    T* v = at_phase(bv, size_t(mphase));
+    // Parameters of the update's size: a last-bit change in the step shows in p.
+    for (int64_t i = 0; i < n; ++i) p[i] = t[i] = T(rr.uniform(-1e-3, 1e-3));
+    for (int step = 1; step <= 3; ++step) {
+      for (int64_t i = 0; i < n; ++i)
+        g[i] = i % 29 == 0 ? T(0) : T(rr.uniform(-1, 1) * std::exp(rr.uniform(i % 13 == 0 ? -90 : -10, 0)));
+      fused_step_expr(p, g, m, v, t, n, step, 1e-3, 0.01);
+    }
+    if (p_ref.empty()) {
+      p_ref.assign(p, p + n), t_ref.assign(t, t + n), m_ref.assign(m, m + n), v_ref.assign(v, v + n);
+      continue;
+    }
+    INFO("moment phase " << mphase);
+    const size_t bytes = size_t(n) * sizeof(T);
+    CHECK(std::memcmp(p, p_ref.data(), bytes) == 0);
+    CHECK(std::memcmp(t, t_ref.data(), bytes) == 0);
+    CHECK(std::memcmp(m, m_ref.data(), bytes) == 0);
+    CHECK(std::memcmp(v, v_ref.data(), bytes) == 0);
+  }
+}
 }  // namespace
+
+TEST_CASE("adam: the moments' 64-byte phase does not change the bits", "[adam]") {
+  check_moment_phase_free<float>();
+  check_moment_phase_free<double>();
+}
 
 TEST_CASE("adam: the chunked fused step has the bits of the whole-block Eigen passes, on every alignment", "[adam]") {
   check_fused_bits<float>();

@@ -110,7 +110,8 @@ void fused_range_expr(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi,
 // Chunk boundaries sit on packet boundaries, so every element takes the
 // path it takes over the whole block (a chunk is all packets, the block's
 // scalar head and tail are run alone). That needs all five arrays on one
-// alignment phase; otherwise the block runs whole.
+// alignment phase (the moments are 64-byte aligned, so aligned parameters,
+// gradients and targets qualify); otherwise the block runs whole.
 template <class T>
 void fused_block(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, const FusedCoeffs<T>& c) {
   using Traits = Eigen::internal::packet_traits<T>;

@@ -10,6 +10,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "train/tensor.hpp"
+
 namespace atacom {
 
 struct AdamConfig {
@@ -41,16 +43,16 @@ class Adam {
   void step_fused(T* params, T* grads, double lr, T* target = nullptr, double tau = 0.0);
 
   size_t size() const { return m_.size(); }
-  const std::vector<T>& first_moment() const { return m_; }
-  const std::vector<T>& second_moment() const { return v_; }
+  const AlignedVector<T>& first_moment() const { return m_; }
+  const AlignedVector<T>& second_moment() const { return v_; }
   int64_t steps() const { return t_; }
   void save(std::ostream& out) const;
   void load(std::istream& in);  // throws on size mismatch or truncation
 
  private:
   AdamConfig cfg_;
-  std::vector<T> m_;  // (n) first moment
-  std::vector<T> v_;  // (n) second moment
+  AlignedVector<T> m_;  // (n) first moment, 64-byte aligned like the parameters
+  AlignedVector<T> v_;  // (n) second moment
   int64_t t_ = 0;
 };
 
