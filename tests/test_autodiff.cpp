@@ -282,3 +282,67 @@ TEST_CASE("autodiff: results do not depend on where the caller's buffers sit", "
   const auto a = run(0);
   for (int shift : {1, 3, 5, 8}) REQUIRE(run(shift) == a);
 }
+
+TEST_CASE("autodiff: GradMode::Set writes what Add adds into a zeroed buffer, and never reads the old contents",
+          "[autodiff]") {
+  // A two-layer ensemble net (shapes the exact GEMM kernel takes and ones
+  // it declines), its first weight also used by a sum (a non-linear op), a
+  // misaligned bias (staged), and a parameter the loss never reaches.
+  using TapeF = atacom::Tape<float>;
+  const int B = 64, in = 40, hid = 128, E = 2;
+  Rng rng(21, 0);
+  const size_t n_w1 = size_t(E) * in * hid, n_b1 = size_t(E) * hid, n_w2 = size_t(E) * hid * 3, n_u = 7;
+  // All parameters in one buffer; b1 starts one float off a 64-byte line.
+  const size_t o_w1 = 0, o_b1 = n_w1 + 1, o_w2 = (o_b1 + n_b1 + 15) / 16 * 16, o_u = o_w2 + n_w2 + 16;
+  atacom::AlignedVector<float> params(o_u + n_u + 16), x(size_t(B) * in);
+  for (auto& v : params) v = float(rng.uniform(-0.3, 0.3));
+  for (auto& v : x) v = float(rng.uniform(-1, 1));
+  auto run = [&](TapeF::GradMode mode, float fill, bool reuse_w1) {  // gradients after two backward passes
+    atacom::AlignedVector<float> g(params.size(), fill);
+    TapeF t;
+    for (int rep = 0; rep < 2; ++rep) {  // the second backward sees the first one's gradients
+      t.clear();
+      const auto w1 = t.leaf(params.data() + o_w1, g.data() + o_w1, E * in, hid, mode);
+      const auto b1 = t.leaf(params.data() + o_b1, g.data() + o_b1, 1, E * hid, mode);
+      const auto w2 = t.leaf(params.data() + o_w2, g.data() + o_w2, E * hid, 3, mode);
+      t.leaf(params.data() + o_u, g.data() + o_u, 1, int(n_u), mode);  // unused
+      const auto h = t.linear(t.constant(x.data(), B, in), w1, b1, E, true);
+      auto loss = t.sum(t.square(t.linear(h, w2, -1, E)));
+      if (reuse_w1) loss = t.add(loss, t.sum(t.square(w1)));
+      t.backward(loss);
+    }
+    return g;
+  };
+  for (const bool reuse : {false, true}) {
+    INFO("w1 also in a sum: " << reuse);
+    // Set, twice, over a buffer of NaN or junk: the second backward's gradient alone.
+    const auto set_nan = run(TapeF::GradMode::Set, std::nanf(""), reuse);
+    const auto set_junk = run(TapeF::GradMode::Set, 1e30f, reuse);
+    const auto in_param = [&](size_t k) {
+      return k < o_w1 + n_w1 || (k >= o_b1 && k < o_b1 + n_b1) || (k >= o_w2 && k < o_w2 + n_w2) ||
+             (k >= o_u && k < o_u + n_u);
+    };
+    // Gradients of one backward, for comparison: Add once into zeros.
+    atacom::AlignedVector<float> once(params.size(), 0.0f);
+    {
+      TapeF t;
+      const auto w1 = t.leaf(params.data() + o_w1, once.data() + o_w1, E * in, hid);
+      const auto b1 = t.leaf(params.data() + o_b1, once.data() + o_b1, 1, E * hid);
+      const auto w2 = t.leaf(params.data() + o_w2, once.data() + o_w2, E * hid, 3);
+      const auto h = t.linear(t.constant(x.data(), B, in), w1, b1, E, true);
+      auto loss = t.sum(t.square(t.linear(h, w2, -1, E)));
+      if (reuse) loss = t.add(loss, t.sum(t.square(w1)));
+      t.backward(loss);
+    }
+    size_t nonzero = 0;
+    for (size_t k = 0; k < params.size(); ++k) {
+      if (!in_param(k)) continue;
+      INFO("element " << k);
+      REQUIRE(set_nan[k] == once[k]);  // bitwise up to the sign of 0 (== treats -0 and +0 as equal)
+      REQUIRE(set_junk[k] == once[k]);
+      nonzero += once[k] != 0.0f;
+    }
+    REQUIRE(nonzero > n_w1);  // the test exercised real gradients
+    for (size_t k = o_u; k < o_u + n_u; ++k) REQUIRE(set_nan[k] == 0.0f);  // unreached: written as 0
+  }
+}

@@ -80,6 +80,7 @@ namespace {
 template <class T>
 struct FusedCoeffs {
   T b1, b2, eps, step_size, inv_sqrt_bc2, ta, tb;
+  bool zero_grads;
 };
 
 // The fused step on [lo, hi) as Eigen array expressions: the definition of
@@ -98,7 +99,7 @@ void fused_range_expr(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi,
   flush_subnormal(M);
   flush_subnormal(V);
   P -= c.step_size * M / (V.sqrt() * c.inv_sqrt_bc2 + c.eps);
-  G.setZero();
+  if (c.zero_grads) G.setZero();
   if (target) {
     Eigen::Map<A> Tg(target + lo, n);
     Tg = c.ta * Tg + c.tb * P;
@@ -137,11 +138,12 @@ void fused_block(T* p, T* g, T* m, T* v, T* target, int64_t lo, int64_t hi, cons
 }  // namespace
 
 template <class T>
-void Adam<T>::step_fused(T* p, T* g, double lr, T* target, double tau) {
+void Adam<T>::step_fused(T* p, T* g, double lr, T* target, double tau, Grads after) {
   ++t_;
   const FusedCoeffs<T> c{T(cfg_.beta1), T(cfg_.beta2), T(cfg_.eps),
                          T(lr / (1.0 - std::pow(cfg_.beta1, double(t_)))),
-                         T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_)))), T(1.0 - tau), T(tau)};
+                         T(1.0 / std::sqrt(1.0 - std::pow(cfg_.beta2, double(t_)))), T(1.0 - tau), T(tau),
+                         after == Grads::Zero};
   T* m = m_.data();
   T* v = v_.data();
   parallel_blocks(int64_t(m_.size()), kBlock, [&](int64_t lo, int64_t hi) {

@@ -35,12 +35,18 @@ class Adam {
   // One step: p -= lr * mhat / (sqrt(vhat) + eps), with
   // mhat = m / (1 - beta1^t), vhat = v / (1 - beta2^t).
   void step(T* params, const T* grads, double lr);
+  // What step_fused leaves in grads: zeros, for a backward that adds into
+  // them (the tape's GradMode::Add), or the gradient as the step used it
+  // (subnormals flushed to 0), for one that writes them (GradMode::Set).
+  enum class Grads { Zero, Keep };
   // The same step fused with what the training loop does next, chunk by
   // chunk while the arrays sit in L1: zero the gradients (ready for the next
-  // backward) and, when target != null, Polyak-average it: target = (1 - tau)
-  // target + tau params. Its bits are those of the whole-block Eigen passes
-  // it was before (tests/test_adam.cpp keeps them as the reference).
-  void step_fused(T* params, T* grads, double lr, T* target = nullptr, double tau = 0.0);
+  // backward; not with Grads::Keep) and, when target != null, Polyak-average
+  // it: target = (1 - tau) target + tau params. Its bits are those of the
+  // whole-block Eigen passes it was before (tests/test_adam.cpp keeps them
+  // as the reference).
+  void step_fused(T* params, T* grads, double lr, T* target = nullptr, double tau = 0.0,
+                  Grads after = Grads::Zero);
 
   size_t size() const { return m_.size(); }
   const AlignedVector<T>& first_moment() const { return m_; }

@@ -120,12 +120,13 @@ typename Tape<T>::Id Tape<T>::constant(const T* data, int rows, int cols) {
 }
 
 template <class T>
-typename Tape<T>::Id Tape<T>::leaf(T* value, T* grad, int rows, int cols) {
+typename Tape<T>::Id Tape<T>::leaf(T* value, T* grad, int rows, int cols, GradMode mode) {
   Node n;
   n.op = Op::Leaf;
   n.rows = rows;
   n.cols = cols;
   n.needs_grad = grad != nullptr;
+  n.grad_mode = mode;
   const size_t sz = size_t(rows) * size_t(cols);
   if (is_aligned64(value)) {
     n.v = value;
@@ -135,7 +136,8 @@ typename Tape<T>::Id Tape<T>::leaf(T* value, T* grad, int rows, int cols) {
   }
   if (grad && is_aligned64(grad)) {
     n.g = grad;
-  } else if (grad) {
+    n.unset = mode == GradMode::Set;  // the caller's buffer, uncleared
+  } else if (grad) {  // staged: zeroed here, handed over (+= or =) at the end of backward()
     n.g = arena_.alloc(sz);
     std::memset(n.g, 0, sz * sizeof(T));
     n.ext_g = grad;
@@ -156,6 +158,9 @@ template <class T>
 void relu_mask_grad(T* __restrict g, const T* __restrict v, int64_t lo, int64_t hi) {
   for (int64_t k = lo; k < hi; ++k) g[k] = v[k] > T(0) ? T(0) + g[k] : T(0);
 }
+// Rows a tile starts from: the kernel reads C's initial row in place.
+template <class T>
+constexpr T kZeroRow[kColBlock] = {};
 }  // namespace
 
 template <class T>
@@ -193,8 +198,7 @@ typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups, bool relu)
     const T* wt = wv + int64_t(q) * in * out + c0;
     // Every row starts as the bias (or zeros); the kernel reads it in place,
     // the Eigen fallback gets it copied in first: the same bits either way.
-    static constexpr T kZeroRow[kColBlock] = {};
-    const T* init = bv ? bv + q * out + c0 : kZeroRow;
+    const T* init = bv ? bv + q * out + c0 : kZeroRow<T>;
     if (exact_tile<T>(nr, nc, in, xt, ldx, 1, wt, out, 1, yt, ldy, init, relu)) return;
     for (int i = 0; i < nr; ++i) std::memcpy(yt + int64_t(i) * ldy, init, sizeof(T) * size_t(nc));
     MatMap<T> Y(yt, nr, nc, Eigen::OuterStride<>(ldy));
@@ -218,6 +222,10 @@ void Tape<T>::back_linear(const Node& y) {
   const bool shared = groups > 1 && x.cols == in;
   const int ldx = x.cols, ldy = y.cols;
   const bool dx = x.needs_grad, dw = w.needs_grad, db = b && b->needs_grad;
+  // A GradMode::Set parameter's first contribution is written, not added:
+  // C = 0 + X^T dY from a zero row (the bits of += into a zeroed buffer),
+  // without reading the buffer's stale contents.
+  const bool set_w = dw && w.unset, set_b = db && b->unset;
   const int rb = blocks(B, kRowBlock);
   const int xcb = blocks(in, kColBlock);
   const int xgroups = shared ? 1 : groups;
@@ -257,7 +265,9 @@ void Tape<T>::back_linear(const Node& y) {
       T* dwt = w.g + int64_t(q) * in * out + c0;
       const T* xt = x.v + (shared ? 0 : q * in);
       const T* dyt = y.g + q * out + c0;
-      if (!exact_tile<T>(in, nc, B, xt, 1, ldx, dyt, ldy, 1, dwt, out, nullptr, false)) {
+      if (!exact_tile<T>(in, nc, B, xt, 1, ldx, dyt, ldy, 1, dwt, out, set_w ? kZeroRow<T> : nullptr, false)) {
+        if (set_w)
+          for (int i = 0; i < in; ++i) std::memset(dwt + int64_t(i) * out, 0, sizeof(T) * size_t(nc));
         MatMap<T> DW(dwt, in, nc, Eigen::OuterStride<>(out));
         CMatMap<T> X(xt, B, in, Eigen::OuterStride<>(ldx));
         CMatMap<T> DY(dyt, B, nc, Eigen::OuterStride<>(ldy));
@@ -266,12 +276,15 @@ void Tape<T>::back_linear(const Node& y) {
     }
     if (db) {
       T* dbv = b->g + q * out + c0;
+      if (set_b) std::memset(dbv, 0, sizeof(T) * size_t(nc));
       for (int i = 0; i < B; ++i) {
         const T* dyr = y.g + int64_t(i) * ldy + q * out + c0;
         for (int j = 0; j < nc; ++j) dbv[j] += dyr[j];
       }
     }
   });
+  if (set_w) nodes_[size_t(y.b)].unset = false;
+  if (set_b) nodes_[size_t(y.c)].unset = false;
 }
 
 // ---------------------------------------------------------------- binary, broadcasting
@@ -589,7 +602,34 @@ template <class T>
 void Tape<T>::backward(Id loss) {
   const Node& l = node(loss);
   check(l.rows == 1 && l.cols == 1, "backward", "loss must be (1 x 1), got " + shape(l.rows, l.cols));
-  if (!l.needs_grad) return;  // nothing upstream wants a gradient
+  // A GradMode::Set leaf that some op other than a linear layer's weight or
+  // bias consumes is cleared first and then added to like any other.
+  for (const Node& n : nodes_) {
+    if (n.op == Op::Leaf) continue;
+    for (const Id in : {n.a, n.b, n.c}) {
+      if (in < 0 || !nodes_[size_t(in)].unset) continue;
+      if (n.op == Op::Linear && in != n.a) continue;
+      Node& p = nodes_[size_t(in)];
+      std::memset(p.g, 0, sizeof(T) * size_t(p.rows) * size_t(p.cols));
+      p.unset = false;
+    }
+  }
+  if (l.needs_grad) sweep(loss);
+  // What no op wrote gets 0; staged leaves go to their owners.
+  for (Id id = 0; id < Id(nodes_.size()); ++id) {
+    Node& n = nodes_[size_t(id)];
+    const size_t sz = size_t(n.rows) * size_t(n.cols);
+    if (n.unset) std::memset(n.g, 0, sizeof(T) * sz), n.unset = false;
+    if (!n.ext_g) continue;
+    if (n.grad_mode == GradMode::Set) std::memcpy(n.ext_g, n.g, sizeof(T) * sz);
+    else if (id <= loss)
+      for (size_t k = 0; k < sz; ++k) n.ext_g[k] += n.g[k];
+  }
+}
+
+template <class T>
+void Tape<T>::sweep(Id loss) {
+  const Node& l = node(loss);
   l.g[0] += T(1);
   for (Id id = loss; id >= 0; --id) {
     const Node& y = nodes_[size_t(id)];
@@ -619,11 +659,6 @@ void Tape<T>::backward(Id loss) {
       case Op::TanhGaussLogp: back_tanh_gauss_logp<T>(y, node(y.a), node(y.b), node(y.c)); break;
       default: back_unary(y); break;
     }
-  }
-  for (Id id = 0; id <= loss; ++id) {  // hand staged leaf gradients to their owners
-    const Node& n = nodes_[size_t(id)];
-    if (n.ext_g)
-      for (int64_t k = 0; k < int64_t(n.rows) * n.cols; ++k) n.ext_g[k] += n.g[k];
   }
 }
 

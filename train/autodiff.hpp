@@ -9,8 +9,9 @@
 //
 // Shapes are (rows x cols), row-major, rows = batch. Binary elementwise ops
 // broadcast a dimension of size 1. Parameters are leaves over external
-// buffers whose gradients accumulate into external grad buffers; a leaf with
-// a null grad pointer is a constant (frozen weights, data).
+// buffers whose gradients accumulate into external grad buffers (or, with
+// GradMode::Set, are written there, so nobody has to clear them); a leaf
+// with a null grad pointer is a constant (frozen weights, data).
 //
 // Determinism: GEMMs are cut into tasks by a fixed (row block x column block)
 // partition that depends only on the shapes, and every reduction runs in one
@@ -35,9 +36,17 @@ class Tape {
  public:
   using Id = int32_t;
 
+  // How backward() hands a parameter leaf its gradient.
+  enum class GradMode : uint8_t {
+    Add,  // grad += dL/dvalue
+    Set,  // grad = dL/dvalue (0 where the loss does not depend on it)
+  };
+
   struct Node {
     Op op = Op::Leaf;
     bool needs_grad = false;
+    GradMode grad_mode = GradMode::Add;  // leaves with a caller's grad buffer
+    bool unset = false;  // a GradMode::Set leaf whose g backward() has not written yet
     int rows = 0, cols = 0;
     T* v = nullptr;     // (rows x cols) value
     T* g = nullptr;     // (rows x cols) gradient, null when !needs_grad
@@ -57,8 +66,11 @@ class Tape {
   // leaf's gradient staged there and added to `grad` by backward()), so the
   // result never depends on where the caller's buffer sits.
   Id constant(const T* data, int rows, int cols);
-  // External leaf; when grad != null, backward() adds dL/dvalue into grad.
-  Id leaf(T* value, T* grad, int rows, int cols);
+  // External leaf; when grad != null, backward() adds dL/dvalue into grad
+  // (GradMode::Add) or writes it there (GradMode::Set: grad's old contents
+  // are never read, and no caller needs to clear it). Set gives the bits of
+  // Add into a zeroed buffer, up to the sign of a zero gradient.
+  Id leaf(T* value, T* grad, int rows, int cols, GradMode mode = GradMode::Add);
 
   // y = x W + b for `groups` independent blocks (an ensemble in one op):
   //   W (groups*in x out), b (1 x groups*out) or -1, y (B x groups*out);
@@ -109,6 +121,7 @@ class Tape {
   Id unary(Op op, Id x);
   Id binary(Op op, Id a, Id b);
   Id reduce(Op op, Id x, int axis);
+  void sweep(Id loss);  // the reverse pass of backward()
   void back_linear(const Node& n);
   void back_binary(const Node& n);
   void back_unary(const Node& n);

@@ -97,14 +97,15 @@ void Mlp<T>::init(Rng& rng) {
 }
 
 template <class T>
-typename Tape<T>::Id Mlp<T>::forward(Tape<T>& tape, typename Tape<T>::Id x, bool param_grads) {
+typename Tape<T>::Id Mlp<T>::forward(Tape<T>& tape, typename Tape<T>::Id x, bool param_grads,
+                                     typename Tape<T>::GradMode mode) {
   typename Tape<T>::Id h = x;
   for (size_t li = 0; li < layers_.size(); ++li) {
     const Layer& l = layers_[li];
     T* gw = param_grads ? grads_.data() + l.w : nullptr;
     T* gb = param_grads ? grads_.data() + l.b : nullptr;
-    const auto W = tape.leaf(params_.data() + l.w, gw, ensemble_ * l.in, l.out);
-    const auto b = tape.leaf(params_.data() + l.b, gb, 1, ensemble_ * l.out);
+    const auto W = tape.leaf(params_.data() + l.w, gw, ensemble_ * l.in, l.out, mode);
+    const auto b = tape.leaf(params_.data() + l.b, gb, 1, ensemble_ * l.out, mode);
     const bool hidden = li + 1 < layers_.size();
     h = tape.linear(h, W, b, ensemble_, hidden && act_ == Activation::Relu);
     if (hidden) {

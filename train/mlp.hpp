@@ -48,8 +48,10 @@ class Mlp {
 
   // x: (B x in), shared by all members, or (B x ensemble*in).
   // Returns (B x ensemble*out). param_grads = false freezes the weights
-  // (gradients still flow to x).
-  typename Tape<T>::Id forward(Tape<T>& tape, typename Tape<T>::Id x, bool param_grads);
+  // (gradients still flow to x); otherwise backward() adds the parameter
+  // gradients into grads() or, with GradMode::Set, writes them there.
+  typename Tape<T>::Id forward(Tape<T>& tape, typename Tape<T>::Id x, bool param_grads,
+                               typename Tape<T>::GradMode mode = Tape<T>::GradMode::Add);
 
   AlignedVector<T>& params() { return params_; }
   const AlignedVector<T>& params() const { return params_; }

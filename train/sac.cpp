@@ -120,9 +120,16 @@ Sac::Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed)
 
 double Sac::alpha() const { return std::exp(log_alpha_); }
 
+namespace {
+// Each update's backward writes the parameter gradients and Adam leaves
+// them in place: no pass clears them, and dW never reads the stale buffer.
+constexpr auto kSetGrads = Tape<float>::GradMode::Set;
+constexpr auto kKeepGrads = Adam<float>::Grads::Keep;
+}  // namespace
+
 Sac::PolicyOut Sac::policy(Tape<float>& t, Tape<float>::Id obs, const float* noise, bool param_grads) {
   const int B = t.node(obs).rows, A = act_dim_;
-  const auto out = actor_.forward(t, obs, param_grads);
+  const auto out = actor_.forward(t, obs, param_grads, kSetGrads);
   const auto mu = t.slice(out, 0, A);
   const auto log_std = t.clamp(t.slice(out, A, 2 * A), float(cfg_.log_std_min), float(cfg_.log_std_max));
   const auto u = t.add(mu, t.mul(t.exp(log_std), t.constant(noise, B, A)));
@@ -184,7 +191,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     const auto q = critic_.forward(t, t.concat(obs, pi.action), false);
     const auto qmin = t.minimum(t.slice(q, 0, 1), t.slice(q, 1, 2));
     const auto loss = t.mean(t.sub(t.affine(pi.logp, alpha, 0.0f), qmin));
-    t.backward(loss);  // actor grads are zero here: the last step_fused cleared them
+    t.backward(loss);  // writes the actor grads (GradMode::Set): nothing clears them
     const float* lp = t.value(pi.logp).data;
     for (int i = 0; i < B; ++i) mean_logp += lp[i];
     mean_logp /= B;
@@ -209,10 +216,10 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
       y_[size_t(i)] = batch.reward[size_t(i)] + gamma * (1.0f - batch.terminated[size_t(i)]) * v;
     }
     const auto obs = t.constant(batch.obs.data(), B, D);
-    const auto q = critic_.forward(t, t.concat(obs, t.constant(batch.action.data(), B, A)), true);
+    const auto q = critic_.forward(t, t.concat(obs, t.constant(batch.action.data(), B, A)), true, kSetGrads);
     const auto err = t.sub(q, t.constant(y_.data(), B, 1));
     const auto loss = t.sum(t.mean(t.square(err), 0));
-    t.backward(loss);  // critic grads are zero here: the last step_fused cleared them
+    t.backward(loss);  // writes the critic grads (GradMode::Set)
     st.critic_loss = 0.5 * t.scalar(loss);  // mean over the two critics
     double qm = 0;
     const float* qv = t.value(q).data;
@@ -224,12 +231,12 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
   // its gradient reset in one pass. Elementwise over disjoint buffers.
   auto actor_step = [&]() {
     if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
-    actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor);
+    actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor, nullptr, 0.0, kKeepGrads);
   };
   auto critic_step = [&]() {
     if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
     critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic,
-                           critic_target_.params().data(), cfg_.tau);
+                           critic_target_.params().data(), cfg_.tau, kKeepGrads);
   };
   // The phases share no written state, so running them concurrently gives
   // the same bits as running them one after the other. The critic phase is
