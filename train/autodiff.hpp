@@ -69,7 +69,8 @@ class Tape {
   // External leaf; when grad != null, backward() adds dL/dvalue into grad
   // (GradMode::Add) or writes it there (GradMode::Set: grad's old contents
   // are never read, and no caller needs to clear it). Set gives the bits of
-  // Add into a zeroed buffer, up to the sign of a zero gradient.
+  // Add into a zeroed buffer, up to the sign of a zero gradient. (Like every
+  // gradient on the tape, this holds for one backward() per recorded graph.)
   Id leaf(T* value, T* grad, int rows, int cols, GradMode mode = GradMode::Add);
 
   // y = x W + b for `groups` independent blocks (an ensemble in one op):

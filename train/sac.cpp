@@ -227,8 +227,9 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     st.q_mean = qm / (2 * B);
   };
 
-  // Actor step, and critic step with the target's Polyak update, each with
-  // its gradient reset in one pass. Elementwise over disjoint buffers.
+  // Actor step, and critic step with the target's Polyak update, each in
+  // one pass; the gradients stay (the next backward writes them).
+  // Elementwise over disjoint buffers.
   auto actor_step = [&]() {
     if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
     actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor, nullptr, 0.0, kKeepGrads);
