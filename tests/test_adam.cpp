@@ -94,21 +94,20 @@ void fused_step_expr(T* p, T* g, T* m, T* v, T* target, int64_t n, int64_t t, do
   }
 }
 
-// A view into buf on the same 64-byte phase as like (up to 15 elements in).
+// Elements of x past the last 64-byte boundary.
 template <class T>
-T* same_phase(std::vector<T>& buf, const T* like) {
-  const auto phase = [](const T* x) { return (reinterpret_cast<uintptr_t>(x) % 64) / sizeof(T); };
-  const size_t per_line = 64 / sizeof(T);
-  return buf.data() + (phase(like) + per_line - phase(buf.data())) % per_line;
-}
+size_t phase_of(const T* x) { return (reinterpret_cast<uintptr_t>(x) % 64) / sizeof(T); }
 
 // A view into buf whose address is `elems` elements past a 64-byte boundary.
 template <class T>
 T* at_phase(std::vector<T>& buf, size_t elems) {
   const size_t per_line = 64 / sizeof(T);
-  const size_t phase = (reinterpret_cast<uintptr_t>(buf.data()) % 64) / sizeof(T);
-  return buf.data() + (elems % per_line + per_line - phase) % per_line;
+  return buf.data() + (elems % per_line + per_line - phase_of(buf.data())) % per_line;
 }
+
+// A view into buf on the same 64-byte phase as like (up to 15 elements in).
+template <class T>
+T* same_phase(std::vector<T>& buf, const T* like) { return at_phase(buf, phase_of(like)); }
 
 template <class T>
 void check_fused_bits() {

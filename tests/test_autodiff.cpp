@@ -297,10 +297,12 @@ TEST_CASE("autodiff: GradMode::Set writes what Add adds into a zeroed buffer, an
   atacom::AlignedVector<float> params(o_u + n_u + 16), x(size_t(B) * in);
   for (auto& v : params) v = float(rng.uniform(-0.3, 0.3));
   for (auto& v : x) v = float(rng.uniform(-1, 1));
-  auto run = [&](TapeF::GradMode mode, float fill, bool reuse_w1) {  // gradients after two backward passes
+  // The gradient buffer after `passes` backward passes (each on a freshly
+  // recorded graph) over a buffer that starts as `fill`.
+  auto run = [&](TapeF::GradMode mode, float fill, bool reuse_w1, int passes) {
     atacom::AlignedVector<float> g(params.size(), fill);
     TapeF t;
-    for (int rep = 0; rep < 2; ++rep) {  // the second backward sees the first one's gradients
+    for (int rep = 0; rep < passes; ++rep) {  // a second backward sees the first one's gradients
       t.clear();
       const auto w1 = t.leaf(params.data() + o_w1, g.data() + o_w1, E * in, hid, mode);
       const auto b1 = t.leaf(params.data() + o_b1, g.data() + o_b1, 1, E * hid, mode);
@@ -316,24 +318,14 @@ TEST_CASE("autodiff: GradMode::Set writes what Add adds into a zeroed buffer, an
   for (const bool reuse : {false, true}) {
     INFO("w1 also in a sum: " << reuse);
     // Set, twice, over a buffer of NaN or junk: the second backward's gradient alone.
-    const auto set_nan = run(TapeF::GradMode::Set, std::nanf(""), reuse);
-    const auto set_junk = run(TapeF::GradMode::Set, 1e30f, reuse);
+    const auto set_nan = run(TapeF::GradMode::Set, std::nanf(""), reuse, 2);
+    const auto set_junk = run(TapeF::GradMode::Set, 1e30f, reuse, 2);
     const auto in_param = [&](size_t k) {
       return k < o_w1 + n_w1 || (k >= o_b1 && k < o_b1 + n_b1) || (k >= o_w2 && k < o_w2 + n_w2) ||
              (k >= o_u && k < o_u + n_u);
     };
     // Gradients of one backward, for comparison: Add once into zeros.
-    atacom::AlignedVector<float> once(params.size(), 0.0f);
-    {
-      TapeF t;
-      const auto w1 = t.leaf(params.data() + o_w1, once.data() + o_w1, E * in, hid);
-      const auto b1 = t.leaf(params.data() + o_b1, once.data() + o_b1, 1, E * hid);
-      const auto w2 = t.leaf(params.data() + o_w2, once.data() + o_w2, E * hid, 3);
-      const auto h = t.linear(t.constant(x.data(), B, in), w1, b1, E, true);
-      auto loss = t.sum(t.square(t.linear(h, w2, -1, E)));
-      if (reuse) loss = t.add(loss, t.sum(t.square(w1)));
-      t.backward(loss);
-    }
+    const auto once = run(TapeF::GradMode::Add, 0.0f, reuse, 1);
     size_t nonzero = 0;
     for (size_t k = 0; k < params.size(); ++k) {
       if (!in_param(k)) continue;
