@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 #include <unistd.h>
 #include <vector>
 
@@ -150,6 +151,38 @@ TEST_CASE("sac: snapshot round trip restores the agent bitwise", "[sac]") {
   Sac wrong(4, 2, small_config(), 1);
   s.seekg(0);
   REQUIRE_THROWS_WITH(wrong.load(s), Catch::Contains("dims"));
+}
+
+TEST_CASE("sac: a reader right after update() sees the deferred critic step whole", "[sac]") {
+  // The critics' Adam step runs on a worker after update() returns
+  // (overlapping the caller's env step). With 256-256 critics it takes about
+  // 100 us, so a reader that did not wait would see it half done on two
+  // threads, and not done at all on one.
+  SacConfig c = atacom::default_sac_config();
+  c.batch_size = 16;
+  const ReplayBatch b = random_batch(16, 5, 3, 11);
+  auto snapshot = [](const Sac& s) {
+    std::ostringstream o;
+    s.save(o);
+    return o.str();
+  };
+  Sac eager(5, 3, c, 12), settled(5, 3, c, 12);
+  for (int i = 0; i < 3; ++i) {
+    eager.update(b, true);
+    const std::string now = snapshot(eager);
+    const uint64_t hash_now = eager.state_hash();
+    const auto critic_now = eager.critic().params();
+    settled.update(b, true);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the step has long finished
+    const auto target = settled.critic_target().params();
+    REQUIRE(now == snapshot(settled));
+    REQUIRE(hash_now == settled.state_hash());
+    REQUIRE(critic_now == settled.critic().params());
+    REQUIRE(eager.critic_target().params() == target);
+  }
+  // Destroyed with a step pending: the destructor waits (ASan would see the
+  // worker write freed memory otherwise).
+  { Sac gone(5, 3, c, 13); gone.update(b, true); }
 }
 
 // The acceptance test: mean deterministic eval return >= -200 over 10

@@ -95,6 +95,13 @@ void from_json(const nlohmann::json& j, SacConfig& c) {
   if (!(c.grad_clip >= 0)) bad("grad_clip must be >= 0");
 }
 
+namespace {
+// Each update's backward writes the parameter gradients and Adam leaves
+// them in place: no pass clears them, and dW never reads the stale buffer.
+constexpr auto kSetGrads = Tape<float>::GradMode::Set;
+constexpr auto kKeepGrads = Adam<float>::Grads::Keep;
+}  // namespace
+
 Sac::Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed)
     : cfg_(cfg),
       obs_dim_(obs_dim),
@@ -118,14 +125,33 @@ Sac::Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed)
   y_.assign(B, 0.0f);
 }
 
-double Sac::alpha() const { return std::exp(log_alpha_); }
+Sac::~Sac() noexcept {
+  // A pending step only writes members; wait() rethrows what it threw,
+  // which a destructor must not.
+  try {
+    finish_steps();
+  } catch (...) {
+  }
+}
 
-namespace {
-// Each update's backward writes the parameter gradients and Adam leaves
-// them in place: no pass clears them, and dW never reads the stale buffer.
-constexpr auto kSetGrads = Tape<float>::GradMode::Set;
-constexpr auto kKeepGrads = Adam<float>::Grads::Keep;
-}  // namespace
+void Sac::finish_steps() const {
+  if (!steps_pending_) return;
+  steps_pending_ = false;
+  steps_.wait();
+}
+
+void Sac::step_actor() {
+  if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
+  actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor, nullptr, 0.0, kKeepGrads);
+}
+
+void Sac::step_critic() {
+  if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
+  critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic,
+                         critic_target_.params().data(), cfg_.tau, kKeepGrads);
+}
+
+double Sac::alpha() const { return std::exp(log_alpha_); }
 
 Sac::PolicyOut Sac::policy(Tape<float>& t, Tape<float>::Id obs, const float* noise, bool param_grads) {
   const int B = t.node(obs).rows, A = act_dim_;
@@ -170,10 +196,12 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
                                                 " rows, config batch_size is " + std::to_string(B));
   SacStats st;
   // All noise is drawn up front, in a fixed order, so the two phases below
-  // can run in any order or concurrently.
+  // can run in any order or concurrently. The last update's critic step
+  // may still run meanwhile: it does not touch the RNG or the noise.
   if (update_actor)
     for (auto& z : noise_pi_) z = float(rng_.normal());
   for (auto& z : noise_next_) z = float(rng_.normal());
+  finish_steps();
   const float alpha = float(std::exp(log_alpha_));
   double mean_logp = 0;
 
@@ -227,18 +255,6 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     st.q_mean = qm / (2 * B);
   };
 
-  // Actor step, and critic step with the target's Polyak update, each in
-  // one pass; the gradients stay (the next backward writes them).
-  // Elementwise over disjoint buffers.
-  auto actor_step = [&]() {
-    if (cfg_.grad_clip > 0) clip_grad_norm(actor_.grads().data(), actor_.grads().size(), cfg_.grad_clip);
-    actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), cfg_.lr_actor, nullptr, 0.0, kKeepGrads);
-  };
-  auto critic_step = [&]() {
-    if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
-    critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic,
-                           critic_target_.params().data(), cfg_.tau, kKeepGrads);
-  };
   // The phases share no written state, so running them concurrently gives
   // the same bits as running them one after the other. The critic phase is
   // the longer one; when the actor phase ends after the critic phase has
@@ -250,7 +266,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
   auto actor_branch = [&]() {
     actor_phase();
     if (actor_read.load(std::memory_order_acquire) && std::isfinite(st.actor_loss) && std::isfinite(mean_logp)) {
-      actor_step();
+      step_actor();
       actor_stepped = true;
     }
   };
@@ -271,8 +287,13 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     st.entropy = -mean_logp;
     st.actor_updated = true;
   }
-  if (update_actor && !actor_stepped) tbb::parallel_invoke(actor_step, critic_step);
-  else critic_step();
+  // The actor steps now (act() reads it next). The critics step on a
+  // worker while the caller steps its envs, samples the next batch and
+  // draws the next noise; whatever reads them next waits (finish_steps).
+  // With one thread the step runs at that wait: the same bits either way.
+  if (update_actor && !actor_stepped) step_actor();
+  steps_pending_ = true;
+  steps_.run([this] { step_critic(); });
   return st;
 }
 
@@ -281,6 +302,7 @@ constexpr uint32_t kTagSac = 0x53414331;  // "SAC1"
 }
 
 void Sac::save(std::ostream& out) const {
+  finish_steps();
   bin::write_tag(out, kTagSac);
   bin::write_pod<int32_t>(out, obs_dim_);
   bin::write_pod<int32_t>(out, act_dim_);
@@ -295,6 +317,7 @@ void Sac::save(std::ostream& out) const {
 }
 
 void Sac::load(std::istream& in) {
+  finish_steps();
   bin::expect_tag(in, kTagSac, "sac");
   const auto od = bin::read_pod<int32_t>(in, "sac.obs_dim");
   const auto ad = bin::read_pod<int32_t>(in, "sac.act_dim");

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include <nlohmann/json_fwd.hpp>
+#include <tbb/task_group.h>
 
 #include "train/adam.hpp"
 #include "train/autodiff.hpp"
@@ -76,6 +77,9 @@ struct SacStats {
 class Sac {
  public:
   Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed);
+  ~Sac() noexcept;
+  Sac(const Sac&) = delete;
+  Sac& operator=(const Sac&) = delete;
 
   // Actions (N x act_dim) in [-1, 1] for obs (N x obs_dim). Stochastic
   // actions draw row i's noise from rngs[i] (per-env streams); deterministic
@@ -84,7 +88,11 @@ class Sac {
   // as 0 and counts (env contract).
   void act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions);
 
-  // One gradient update on a sampled batch (B == batch_size).
+  // One gradient update on a sampled batch (B == batch_size). The critics'
+  // Adam step may still be running on a worker when this returns, so that
+  // the caller's env step overlaps it; every member below that reads the
+  // critics, their targets or their moments waits for it first, so callers
+  // observe the stepped agent, bit for bit.
   SacStats update(const ReplayBatch& batch, bool update_actor);
 
   double alpha() const;
@@ -96,11 +104,11 @@ class Sac {
   Rng& rng() { return rng_; }
 
   Mlp<float>& actor() { return actor_; }
-  Mlp<float>& critic() { return critic_; }
-  Mlp<float>& critic_target() { return critic_target_; }
+  Mlp<float>& critic() { finish_steps(); return critic_; }
+  Mlp<float>& critic_target() { finish_steps(); return critic_target_; }
   const Mlp<float>& actor() const { return actor_; }
-  const Mlp<float>& critic() const { return critic_; }
-  const Mlp<float>& critic_target() const { return critic_target_; }
+  const Mlp<float>& critic() const { finish_steps(); return critic_; }
+  const Mlp<float>& critic_target() const { finish_steps(); return critic_target_; }
 
   // FNV-1a hash over every learned value (networks, targets, Adam moments,
   // temperature, RNG): equal hashes mean bitwise equal agents.
@@ -117,6 +125,10 @@ class Sac {
   // Policy head on the tape: returns (action, log_prob) ids for obs id.
   struct PolicyOut { Tape<float>::Id action, logp; };
   PolicyOut policy(Tape<float>& tape, Tape<float>::Id obs, const float* noise, bool param_grads);
+  void step_actor();
+  void step_critic();  // critics' Adam step and the targets' Polyak update
+  void finish_steps() const;  // waits for a deferred step_critic
+
 
   SacConfig cfg_;
   int obs_dim_, act_dim_;
@@ -131,6 +143,10 @@ class Sac {
   std::vector<float> noise_next_;  // (B x act_dim) noise for a' ~ pi(s')
   std::vector<float> y_;           // (B) critic targets
   std::vector<float> act_noise_;   // (N x act_dim) scratch for act()
+  // The deferred step_critic of the last update, if any. It writes only the
+  // critics, their targets and critic_opt_.
+  mutable tbb::task_group steps_;
+  mutable bool steps_pending_ = false;
 };
 
 }  // namespace atacom
