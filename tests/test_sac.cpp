@@ -156,7 +156,8 @@ TEST_CASE("sac: snapshot round trip restores the agent bitwise", "[sac]") {
 TEST_CASE("sac: a reader right after update() sees the deferred critic step whole", "[sac]") {
   // The critics' Adam step runs on a worker after update() returns
   // (overlapping the caller's env step). With 256-256 critics it takes about
-  // 100 us, so a reader that did not wait would see it half done on two
+  // 100 us (92-98 us on two threads, bench/README.md, "One update's critical
+  // path"), so a reader that did not wait would see it half done on two
   // threads, and not done at all on one.
   SacConfig c = atacom::default_sac_config();
   c.batch_size = 16;

@@ -129,7 +129,6 @@ class Sac {
   void step_critic();  // critics' Adam step and the targets' Polyak update
   void finish_steps() const;  // waits for a deferred step_critic
 
-
   SacConfig cfg_;
   int obs_dim_, act_dim_;
   double target_entropy_;
@@ -142,10 +141,11 @@ class Sac {
   std::vector<float> noise_pi_;    // (B x act_dim) reparameterisation noise for the actor loss
   std::vector<float> noise_next_;  // (B x act_dim) noise for a' ~ pi(s')
   std::vector<float> y_;           // (B) critic targets
-  std::vector<float> act_noise_;   // (N x act_dim) scratch for act()
   // The deferred step_critic of the last update, if any. It writes only the
   // critics, their targets and critic_opt_.
   mutable tbb::task_group steps_;
+  // Whether steps_ holds a task: wait() on an empty group still resets its
+  // context, and the critic accessors call finish_steps() often.
   mutable bool steps_pending_ = false;
 };
 
