@@ -23,6 +23,7 @@
 #include <CLI/CLI.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 #include "bench/bench_common.hpp"

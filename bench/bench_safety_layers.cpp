@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/rng.hpp"

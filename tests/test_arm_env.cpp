@@ -9,6 +9,7 @@
 
 #include "envs/arm/arm_env.hpp"
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/trainer.hpp"

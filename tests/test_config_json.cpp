@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/trainer.hpp"
 #include "src/core/config_json.hpp"
 

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 #include "src/core/binary_io.hpp"

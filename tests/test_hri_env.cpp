@@ -10,8 +10,10 @@
 #include <sstream>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
+#include "atacom/trainer.hpp"
 #include "envs/arm/arm_env.hpp"
 #include "src/core/binary_io.hpp"
 
@@ -67,7 +69,8 @@ TEST_CASE("hri: 44 rows from the groups, p = 1, metrics in info, 512-512-256 SAC
   for (const char* name : {"collision", "human_collision", "spill", "min_human_distance", "final_distance"})
     CHECK(std::find(s.info_names.begin(), s.info_names.end(), name) != s.info_names.end());
   CHECK(env.config().hri.spill_angle > env.config().hri.theta_max);
-  const nlohmann::json sac = env_entry("hri").default_sac(SafetyLayer::Atacom);
+  // The paper preset's networks for HRI (configs/presets/paper.json, reference 5.2).
+  const nlohmann::json sac = resolve_run_config({{"train", {{"env", "hri"}, {"algo", "atacom-sac"}}}}).learner;
   CHECK(sac.at("actor").at("hidden") == nlohmann::json({512, 512, 256}));
   CHECK(sac.at("critic").at("hidden") == nlohmann::json({512, 512, 256}));
   // JSON round trip, and the hri section is rejected where it does not belong.

@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "atacom/rng.hpp"

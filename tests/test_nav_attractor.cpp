@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "envs/nav/nav_attractor.hpp"
 #include "envs/nav/nav_env.hpp"
 

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "envs/nav/nav_env.hpp"
 #include "src/core/data_dir.hpp"
 #include "atacom/parallel.hpp"

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "envs/pendulum/pendulum.hpp"
 
 using atacom::PendulumEnv;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/policy.hpp"
 #include "envs/arm/arm_attractor.hpp"
 #include "envs/arm/arm_env.hpp"

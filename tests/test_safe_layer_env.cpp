@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/safety_layer.hpp"

@@ -10,6 +10,7 @@
 
 #include "atacom/env.hpp"
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/rng.hpp"
 #include "src/core/snapshot.hpp"
 

@@ -273,7 +273,7 @@ nlohmann::json attack_result(const nlohmann::json& s) {
           {"per_s", wall > 0 ? nlohmann::json(double(steps) / wall) : nlohmann::json(nullptr)}};
 }
 
-nlohmann::json adversary_default_config(const std::string&, SafetyLayer) { return default_adversary_config(); }
+nlohmann::json adversary_default_config_json() { return default_adversary_config(); }
 
 nlohmann::json adversary_resolve_config(const nlohmann::json& section) {
   return nlohmann::json(section.get<AdversaryConfig>());

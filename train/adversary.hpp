@@ -102,7 +102,7 @@ class AdversaryLearner final : public Learner {
 // "wall_s", "per_s"}.
 nlohmann::json attack_result(const nlohmann::json& summary);
 
-nlohmann::json adversary_default_config(const std::string& env, SafetyLayer safety);
+nlohmann::json adversary_default_config_json();
 nlohmann::json adversary_resolve_config(const nlohmann::json& section);
 std::unique_ptr<Learner> make_adversary_learner(const LearnerContext& ctx, const nlohmann::json& resolved);
 std::unique_ptr<Policy> make_adversary_policy(const EnvSpec& spec, const nlohmann::json& resolved);

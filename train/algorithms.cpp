@@ -5,26 +5,31 @@
 
 namespace atacom {
 
-const std::vector<Algorithm>& algorithms() {
+// The action sources, one line each; every one runs under every layer.
+const std::vector<ActionSourceEntry>& action_sources() {
   using A = ActionSource;
-  using S = SafetyLayer;
-  static const std::vector<Algorithm> table = {
-      {"sac", A::Learner, S::None, "sac", "SAC on the plain env"},
-      {"atacom-sac", A::Learner, S::Atacom, "sac", "SAC acting on ATACOM's tangent space (the paper's method)"},
-      {"safelayer-sac", A::Learner, S::SafeLayer, "sac", "SAC through SafeLayer's action correction"},
-      {"la", A::Attractor, S::None, "", "the env's linear attractor, evaluated"},
-      {"la-atacom", A::Attractor, S::Atacom, "", "the linear attractor's output as ATACOM's alpha, evaluated"},
-      {"la-safelayer", A::Attractor, S::SafeLayer, "", "the linear attractor corrected by SafeLayer, evaluated"},
-      {"random", A::Random, S::None, "", "uniform random actions, evaluated"},
-      {"random-atacom", A::Random, S::Atacom, "", "uniform random alpha through ATACOM, evaluated"},
-      {"random-safelayer", A::Random, S::SafeLayer, "", "uniform random actions through SafeLayer, evaluated"},
-      {"zero", A::Zero, S::None, "", "zero actions, evaluated"},
-      {"zero-atacom", A::Zero, S::Atacom, "", "zero alpha through ATACOM (pure correction), evaluated"},
-      {"zero-safelayer", A::Zero, S::SafeLayer, "", "zero actions through SafeLayer, evaluated"},
-      {"attack", A::Learner, S::None, "adversary", "SAC adversary maximising the constraint values, no safety layer"},
-      {"attack-atacom", A::Learner, S::Atacom, "adversary", "SAC adversary against ATACOM"},
-      {"attack-safelayer", A::Learner, S::SafeLayer, "adversary", "SAC adversary against SafeLayer"},
+  static const std::vector<ActionSourceEntry> table = {
+      {"sac", A::Learner, "sac", true, "SAC (trains)"},
+      {"la", A::Attractor, "", false, "the env's linear attractor (evaluated only)"},
+      {"random", A::Random, "", false, "uniform random actions (evaluated only)"},
+      {"zero", A::Zero, "", false, "zero actions (evaluated only)"},
+      {"attack", A::Learner, "adversary", false, "SAC adversary maximising the constraint values (trains)"},
   };
+  return table;
+}
+
+const std::vector<Algorithm>& algorithms() {
+  static const std::vector<Algorithm> table = [] {
+    std::vector<Algorithm> t;
+    for (const ActionSourceEntry& src : action_sources())
+      for (SafetyLayer layer : safety_layers()) {
+        const std::string& l = layer.name();
+        const std::string name = layer.is_none() ? src.stem : src.layer_first ? l + "-" + src.stem : src.stem + "-" + l;
+        const std::string help = src.help + (layer.is_none() ? std::string() : ", through " + layer.title());
+        t.push_back({name, src.source, layer, src.learner, help});
+      }
+    return t;
+  }();
   return table;
 }
 

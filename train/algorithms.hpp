@@ -1,17 +1,21 @@
 // The algorithm table: every `--algo` name is an action source composed
-// with a safety layer. This is the one place algorithm names are compared;
-// the env registry and the trainer loop know none of them.
+// with a safety layer, the product of the sources below and the layers of
+// the safety table (include/atacom/safety_layer.hpp). This is the one place
+// algorithm names are made and compared; the env registry and the trainer
+// loop know none of them.
 //
-//   source \ layer      none        atacom           safelayer
+//   source \ layer      none        atacom           safelayer        ...
 //   SAC learner         sac         atacom-sac       safelayer-sac
 //   linear attractor    la          la-atacom        la-safelayer
 //   random actions      random      random-atacom    random-safelayer
 //   zero actions        zero        zero-atacom      zero-safelayer
 //   SAC adversary       attack      attack-atacom    attack-safelayer
 //
-// Learner sources train (and are evaluated as they go); the others are
-// evaluated only. The adversary learns to reach the largest constraint value
-// (train/adversary.hpp), the attack of `atacom attack`.
+// A learner's name puts the layer first (the paper's "ATACOM-SAC"), the
+// evaluated sources and the adversary put it last (the paper's
+// "LA-ATACOM"). Learner sources train (and are evaluated as they go); the
+// others are evaluated only. The adversary learns to reach the largest
+// constraint value (train/adversary.hpp), the attack of `atacom attack`.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -36,6 +40,16 @@ struct Algorithm {
   std::string help;
   bool learns() const { return source == ActionSource::Learner; }
 };
+
+// One action source: a row of the table above.
+struct ActionSourceEntry {
+  std::string stem;      // "sac", "la": the name under no layer
+  ActionSource source;
+  std::string learner;   // learner registry name when source == Learner, else ""
+  bool layer_first;      // "atacom-sac" (true) or "la-atacom" (false)
+  std::string help;      // "SAC (trains)"
+};
+const std::vector<ActionSourceEntry>& action_sources();
 
 const std::vector<Algorithm>& algorithms();
 std::vector<std::string> algorithm_names();

@@ -12,10 +12,10 @@ namespace atacom {
 
 const std::vector<LearnerEntry>& learner_entries() {
   static const std::vector<LearnerEntry> entries = {
-      {"sac", "sac", "Soft Actor-Critic on the env's reward", sac_default_config, sac_resolve_config,
+      {"sac", "sac", "Soft Actor-Critic on the env's reward", sac_default_config_json, sac_resolve_config,
        make_sac_learner, make_sac_policy},
       {"adversary", "adversary", "SAC maximising the constraint values (train/adversary.hpp)",
-       adversary_default_config, adversary_resolve_config, make_adversary_learner, make_adversary_policy},
+       adversary_default_config_json, adversary_resolve_config, make_adversary_learner, make_adversary_policy},
   };
   return entries;
 }

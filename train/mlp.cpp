@@ -36,12 +36,7 @@ double activation_gain(Activation a) {
   }
 }
 
-MlpConfig default_mlp_config() {
-  MlpConfig c;
-  c.hidden = {256, 256};
-  c.activation = Activation::Relu;
-  return c;
-}
+MlpConfig default_mlp_config() { return MlpConfig{}; }
 
 void to_json(nlohmann::json& j, const MlpConfig& c) {
   j = nlohmann::json{{"hidden", c.hidden}, {"activation", activation_name(c.activation)}};

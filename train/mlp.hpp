@@ -24,10 +24,10 @@ Activation parse_activation(const std::string& s);  // throws std::invalid_argum
 double activation_gain(Activation a);
 
 struct MlpConfig {
-  std::vector<int> hidden;            // hidden layer widths
+  std::vector<int> hidden = {256, 256};  // hidden layer widths
   Activation activation = Activation::Relu;  // hidden layers; the output is linear
 };
-// The one default factory: 256-256 ReLU (the paper's networks).
+// The one default factory (MlpConfig{}): 256-256 ReLU (the paper's networks).
 MlpConfig default_mlp_config();
 void to_json(nlohmann::json& j, const MlpConfig& c);
 void from_json(const nlohmann::json& j, MlpConfig& c);  // unknown keys rejected

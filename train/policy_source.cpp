@@ -29,6 +29,7 @@ PolicySource resolve_policy_source(const PolicyRequest& req) {
     s.env = t.env;
     s.env_config = s.trained->config().env;
     s.safety = req.safety.value_or(s.trained->safety());
+    if (s.safety == s.trained->safety()) s.safety_params = s.trained->config().safety;  // the run's layer, as trained
   }
   if (s.env.empty()) throw std::invalid_argument("an env name is needed (--env)");
   return s;

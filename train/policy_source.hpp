@@ -29,6 +29,7 @@ struct PolicySource {
   std::string env;
   nlohmann::json env_config;
   SafetyLayer safety = SafetyLayer::Atacom;
+  nlohmann::json safety_params = nullptr;  // the layer's parameters (null: its defaults for the env)
   std::unique_ptr<TrainedPolicy> trained;  // set for "trained"
 
   // The policy acting on an env of `spec` (built from this source): the

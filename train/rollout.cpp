@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/policy.hpp"
 #include "train/policy_source.hpp"
@@ -33,7 +34,7 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   PolicySource src = resolve_policy_source(req);
   const std::string& env_name = src.env;
   const SafetyLayer safety = src.safety;
-  auto env = make_env(EnvRequest{env_name, cfg.envs, safety, src.env_config});
+  auto env = make_env(EnvRequest{env_name, cfg.envs, safety, src.env_config, src.safety_params});
   const EnvSpec& spec = env->spec();
   const int N = cfg.envs, m = spec.act_dim, k = spec.num_constraints;
   Policy* policy = &src.bind(spec);

@@ -8,6 +8,7 @@
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
 #include "train/algorithms.hpp"
+#include "train/presets.hpp"
 
 namespace atacom {
 
@@ -16,7 +17,8 @@ TrainConfig default_train_config() { return TrainConfig{}; }
 void to_json(nlohmann::json& j, const TrainConfig& c) {
   j = nlohmann::json{{"env", c.env}, {"algo", c.algo}, {"seed", c.seed}, {"steps", c.steps},
                      {"num_envs", c.num_envs}, {"eval_every", c.eval_every}, {"eval_episodes", c.eval_episodes},
-                     {"eval_deterministic", c.eval_deterministic}, {"checkpoint_every", c.checkpoint_every}};
+                     {"eval_deterministic", c.eval_deterministic}, {"checkpoint_every", c.checkpoint_every},
+                     {"preset", c.preset}};
 }
 
 void from_json(const nlohmann::json& j, TrainConfig& c) {
@@ -30,6 +32,7 @@ void from_json(const nlohmann::json& j, TrainConfig& c) {
   r.get("eval_episodes", c.eval_episodes, range::closed(1, limits::kMaxEvalEpisodes));
   r.get("eval_deterministic", c.eval_deterministic);
   r.get("checkpoint_every", c.checkpoint_every, range::closed<int64_t>(0, limits::kMaxSteps));
+  r.get("preset", c.preset);
   r.finish();
 }
 
@@ -48,6 +51,17 @@ void validate(const TrainConfig& c) {
   if (c.eval_episodes < 1 || c.eval_episodes > 100000) bad("eval_episodes must be in [1, 100000]");
   if (c.checkpoint_every < 0) bad("checkpoint_every must be >= 0");
   env_entry(c.env);  // unknown env names fail here, listing the known ones
+  try {
+    find_preset(c.preset);
+  } catch (const std::invalid_argument& e) {
+    bad(std::string("preset: ") + e.what());
+  }
+}
+
+// An object section of the file (nullptr when absent).
+const nlohmann::json* object_section(const nlohmann::json* s, const std::string& name) {
+  if (s && !s->is_object()) throw std::invalid_argument("config section '" + name + "' must be a JSON object");
+  return s;
 }
 }  // namespace
 
@@ -57,35 +71,68 @@ RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* trai
   ConfigReader r(file, "config");
   RunConfig c;
   c.train = train_base ? *train_base : default_train_config();
-  if (const auto* t = r.sub("train")) from_json(*t, c.train);
-  const nlohmann::json* e = r.sub("env");
-  if (const auto* h = r.sub("host")) c.host = *h;  // a record of where a run was computed: kept, not read
+  const nlohmann::json* t = object_section(r.sub("train"), "train");
+  // The preset's fragment for the cell goes under the file: its train keys
+  // first (train.env, train.algo and train.preset come from the file alone).
+  if (t) {
+    for (const char* key : {"env", "algo", "preset"})
+      if (t->contains(key) && t->at(key).is_string()) from_json(nlohmann::json{{key, t->at(key)}}, c.train);
+  }
   validate(c.train);
   const Algorithm& algo = find_algorithm(c.train.algo);
+  nlohmann::json preset = config_fragment(find_preset(c.train.preset).entries, c.train.env, c.train.algo);
+  auto from_preset = [&](const std::string& section) -> const nlohmann::json* {
+    return preset.contains(section) ? &preset[section] : nullptr;
+  };
+  try {
+    if (const auto* pt = from_preset("train")) from_json(*pt, c.train);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("preset '" + c.train.preset + "': " + e.what());
+  }
+  if (t) from_json(*t, c.train);
+  validate(c.train);
+  if (const auto* h = r.sub("host")) c.host = *h;  // a record of where a run was computed: kept, not read
   // Learner sections: the algorithm's own learner's, and no other.
   const nlohmann::json* section = nullptr;
   for (const LearnerEntry& le : learner_entries()) {
-    const nlohmann::json* s = r.sub(le.section.c_str());
-    if (!s) continue;
+    const nlohmann::json* s = object_section(r.sub(le.section.c_str()), le.section);
+    if (!s && !from_preset(le.section)) continue;
     if (le.name != algo.learner)
-      throw std::invalid_argument("config section '" + le.section + "' does not apply to algo '" + algo.name + "' (" +
+      throw std::invalid_argument("config section '" + le.section + "'" + (s ? "" : " of preset '" + c.train.preset + "'") +
+                                  " does not apply to algo '" + algo.name + "' (" +
                                   (algo.learns() ? "it trains the '" + algo.learner + "' learner"
                                                  : std::string("it has no learner")) + ")");
     section = s;
   }
+  // Safety-layer sections: the algorithm's own layer's, and no other.
+  nlohmann::json layer_overrides = nullptr;
+  for (const SafetyLayerEntry& l : safety_layer_entries()) {
+    const nlohmann::json* s = object_section(r.sub(l.name.c_str()), l.name);
+    if (!s && !from_preset(l.name)) continue;
+    if (l.name != algo.safety.name())
+      throw std::invalid_argument("config section '" + l.name + "' does not apply to algo '" + algo.name + "' (its safety layer is " +
+                                  algo.safety.name() + ")");
+    layer_overrides = nlohmann::json::object();
+    if (const auto* p = from_preset(l.name)) merge_into(layer_overrides, *p);
+    if (s) merge_into(layer_overrides, *s);
+  }
+  const nlohmann::json* e = object_section(r.sub("env"), "env");
   r.finish();
   if (algo.learns()) {
     const LearnerEntry& le = learner_entry(algo.learner);
-    // The learner's defaults for this env and layer, then the file's keys
-    // (top-level keys replace, so "target_entropy": null still works).
-    nlohmann::json merged = le.default_config(c.train.env, algo.safety);
-    if (section) {
-      if (!section->is_object()) throw std::invalid_argument("config section '" + le.section + "' must be a JSON object");
-      for (auto it = section->begin(); it != section->end(); ++it) merged[it.key()] = it.value();
-    }
+    // The learner's defaults, the preset's keys, then the file's (top-level
+    // keys replace, so "target_entropy": null still works).
+    nlohmann::json merged = le.default_config();
+    for (const nlohmann::json* over : {from_preset(le.section), section})
+      if (over)
+        for (auto it = over->begin(); it != over->end(); ++it) merged[it.key()] = it.value();
     c.learner = le.resolve(merged);
   }
-  c.env = resolve_env_config(c.train.env, e ? *e : nlohmann::json::object());
+  nlohmann::json env_overrides = nlohmann::json::object();
+  if (const auto* p = from_preset("env")) merge_into(env_overrides, *p);
+  if (e) merge_into(env_overrides, *e);
+  c.env = resolve_env_config(c.train.env, env_overrides);
+  c.safety = resolve_safety_params(algo.safety, c.train.env, layer_overrides);
   return c;
 }
 
@@ -93,6 +140,7 @@ nlohmann::json run_config_json(const RunConfig& c) {
   nlohmann::json j = {{"env", c.env}, {"train", c.train}};
   const Algorithm& algo = find_algorithm(c.train.algo);
   if (algo.learns()) j[learner_entry(algo.learner).section] = c.learner;
+  if (c.safety.is_object() && !c.safety.empty()) j[algo.safety.name()] = c.safety;
   if (!c.host.is_null()) j["host"] = c.host;
   return j;
 }

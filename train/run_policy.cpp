@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/learner.hpp"
 #include "atacom/trainer.hpp"
 #include "train/algorithms.hpp"
@@ -54,7 +55,7 @@ std::unique_ptr<TrainedPolicy> TrainedPolicy::load(const std::string& run_dir, R
     throw std::runtime_error("run '" + run_dir + "' is an evaluation of '" + algo.name +
                              "', which learns nothing: it has no trained policy");
   // The env as training built it (a safety layer may add info columns), for its spec.
-  const auto env = make_env(EnvRequest{t.env, 1, algo.safety, tp->cfg_.env});
+  const auto env = make_env(EnvRequest{t.env, 1, algo.safety, tp->cfg_.env, tp->cfg_.safety});
   const LearnerEntry& le = learner_entry(algo.learner);
   tp->inner_ = le.make_policy(env->spec(), tp->cfg_.learner);
   const std::string path = (dir / run_policy_file(which)).string();

@@ -17,29 +17,7 @@
 
 namespace atacom {
 
-SacConfig default_sac_config() {
-  SacConfig c;
-  c.actor = default_mlp_config();
-  c.critic = default_mlp_config();
-  c.batch_size = 64;
-  c.gamma = 0.995;
-  c.tau = 1e-3;
-  c.lr_actor = 3e-4;
-  c.lr_critic = 3e-4;
-  c.lr_alpha = 1e-6;
-  c.init_alpha = 1.0;
-  c.target_entropy = std::nullopt;
-  c.log_std_min = -20.0;
-  c.log_std_max = 2.0;
-  c.replay_capacity = 200000;
-  c.initial_replay = 5000;
-  c.warmup = 5000;
-  c.updates_per_step = 1.0;
-  c.obs_norm = true;
-  c.grad_clip = 0.0;
-  c.adam = default_adam_config();
-  return c;
-}
+SacConfig default_sac_config() { return SacConfig{}; }
 
 void to_json(nlohmann::json& j, const SacConfig& c) {
   j = nlohmann::json{

@@ -37,11 +37,11 @@ struct SacConfig {
   MlpConfig actor;                        // actor trunk
   MlpConfig critic;                       // each twin critic
   int batch_size = 64;
-  double gamma = 0.99;
+  double gamma = 0.995;
   double tau = 1e-3;                      // Polyak rate of the target critics
   double lr_actor = 3e-4;
   double lr_critic = 3e-4;
-  double lr_alpha = 3e-4;
+  double lr_alpha = 1e-6;
   double init_alpha = 1.0;                // log_alpha starts at log(init_alpha)
   std::optional<double> target_entropy;   // nullopt: -act_dim
   double log_std_min = -20.0;
@@ -54,9 +54,10 @@ struct SacConfig {
   double grad_clip = 0.0;                 // max L2 norm of each network's gradient; 0: off
   AdamConfig adam;
 };
-// The one default factory: the paper's settings (reference section 5):
-// 256-256 ReLU, batch 64, lr 3e-4, tau 1e-3, replay 200k, initial replay and
-// warmup 5000, gamma 0.995, lr_alpha 1e-6, MinMax observation normalisation.
+// The one default factory (SacConfig{} holds the same values): the paper's
+// settings (reference section 5): 256-256 ReLU, batch 64, lr 3e-4, tau 1e-3,
+// replay 200k, initial replay and warmup 5000, gamma 0.995, lr_alpha 1e-6,
+// MinMax observation normalisation.
 SacConfig default_sac_config();
 void to_json(nlohmann::json& j, const SacConfig& c);
 void from_json(const nlohmann::json& j, SacConfig& c);  // unknown keys and bad values rejected

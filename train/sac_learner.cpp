@@ -5,7 +5,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "atacom/env_registry.hpp"
 #include "src/core/binary_io.hpp"
 
 namespace atacom {
@@ -185,16 +184,8 @@ void SacLearner::load(std::istream& in, int64_t env_steps) {
 }
 
 // ---------------------------------------------------------------- registry hooks
-// Global defaults (the paper's), then the env's own settings for this safety
-// layer (EnvEntry::default_sac, reference 5.4): top-level keys replace.
-nlohmann::json sac_default_config(const std::string& env, SafetyLayer safety) {
-  nlohmann::json sac = default_sac_config();
-  if (const auto per_env = env_entry(env).default_sac) {
-    const nlohmann::json d = per_env(safety);
-    for (auto it = d.begin(); it != d.end(); ++it) sac[it.key()] = it.value();
-  }
-  return sac;
-}
+// The one default factory's values (per env and layer settings are presets: train/presets.hpp).
+nlohmann::json sac_default_config_json() { return default_sac_config(); }
 
 nlohmann::json sac_resolve_config(const nlohmann::json& section) { return nlohmann::json(section.get<SacConfig>()); }
 

@@ -85,7 +85,7 @@ class SacLearner : public Learner {
 };
 
 // Learner registry hooks (train/learner_registry.cpp).
-nlohmann::json sac_default_config(const std::string& env, SafetyLayer safety);
+nlohmann::json sac_default_config_json();
 nlohmann::json sac_resolve_config(const nlohmann::json& section);
 std::unique_ptr<Learner> make_sac_learner(const LearnerContext& ctx, const nlohmann::json& resolved);
 std::unique_ptr<Policy> make_sac_policy(const EnvSpec& spec, const nlohmann::json& resolved);

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/safe_env.hpp"
 #include "atacom/safety_layer.hpp"

@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/learner.hpp"
 #include "src/core/binary_io.hpp"
 #include "src/core/fs_util.hpp"
@@ -104,7 +105,7 @@ class Run {
 
 Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts), algo_(&find_algorithm(cfg.train.algo)) {
   const TrainConfig& t = cfg_.train;
-  eval_env_ = make_env(EnvRequest{t.env, t.eval_episodes, algo_->safety, cfg_.env});
+  eval_env_ = make_env(EnvRequest{t.env, t.eval_episodes, algo_->safety, cfg_.env, cfg_.safety});
   spec_ = eval_env_->spec();
   D_ = spec_.obs_dim;
   A_ = spec_.act_dim;
@@ -116,7 +117,7 @@ Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts
   switch (algo_->source) {
     case ActionSource::Learner: {
       N_ = t.num_envs;
-      env_ = make_env(EnvRequest{t.env, N_, algo_->safety, cfg_.env});
+      env_ = make_env(EnvRequest{t.env, N_, algo_->safety, cfg_.env, cfg_.safety});
       env_->seed(uint64_t(t.seed));
       LearnerContext ctx{&env_->spec(), N_, uint64_t(t.seed), &env_->buffers()};
       learner_ = learner_entry(algo_->learner).make(ctx, cfg_.learner);
@@ -141,7 +142,8 @@ Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts
 
 uint64_t Run::config_hash() const {
   nlohmann::json j = run_config_json(cfg_);
-  j["train"].erase("steps");  // a resumed run may extend its budget
+  j["train"].erase("steps");   // a resumed run may extend its budget
+  j["train"].erase("preset");  // every value it gave is explicit (and runs from before presets resume)
   j.erase("host");            // and continue on another machine
   const std::string s = j.dump();
   return bin::fnv1a(s.data(), s.size());

@@ -29,8 +29,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atacom/safe_env.hpp"
-#include "atacom/safety_layer.hpp"
+#include "atacom/control_affine_env.hpp"
 #include "envs/arm/arm_batch.hpp"
 #include "envs/arm/arm_env_config.hpp"
 #include "envs/arm/arm_kernels.hpp"
@@ -120,11 +119,9 @@ class ArmEnv final : public ControlAffineEnv {
 };
 
 // Registry hooks (envs/registry.cpp).
-nlohmann::json arm_sac_defaults(SafetyLayer safety);  // per-env SAC settings (reference 5.4)
 nlohmann::json table_env_default_config();
 nlohmann::json shelf_env_default_config();
 nlohmann::json hri_env_default_config();
-nlohmann::json hri_sac_defaults(SafetyLayer safety);  // arm_sac_defaults + 512-512-256 networks
 std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs);
 std::unique_ptr<BatchEnv> make_shelf_env(const nlohmann::json& config, int num_envs);
 std::unique_ptr<BatchEnv> make_hri_env(const nlohmann::json& config, int num_envs);

@@ -4,7 +4,6 @@
 #include <stdexcept>
 
 #include "envs/arm/arm_env.hpp"
-#include "train/sac.hpp"
 
 namespace atacom {
 
@@ -15,28 +14,6 @@ std::unique_ptr<BatchEnv> make_arm(ArmTask task, const nlohmann::json& config, i
   return std::make_unique<ArmEnv>(c, num_envs);
 }
 }  // namespace
-
-// Reference section 5.4 (the authors' launcher): ATACOM-SAC lr 3e-4 for
-// actor and critic, plain SAC and SafeLayer-SAC 1e-5, lr_alpha 1e-6 for all; target entropy
-// -10 (their template). default_sac_config() already holds the rest
-// (256-256, batch 64, tau 1e-3, gamma 0.995, replay 200k, warm-up 5000).
-nlohmann::json arm_sac_defaults(SafetyLayer safety) {
-  const double lr = safety == SafetyLayer::Atacom ? 3e-4 : 1e-5;
-  return {{"lr_actor", lr}, {"lr_critic", lr}, {"lr_alpha", 1e-6}, {"target_entropy", -10.0}};
-}
-
-// HRI: the authors' launcher overrides the networks to 512-512-256
-// (reference 5.2 'hri_atacom'); the rest as the arm envs. Top-level keys
-// replace, so actor and critic are given whole.
-nlohmann::json hri_sac_defaults(SafetyLayer safety) {
-  nlohmann::json d = arm_sac_defaults(safety);
-  const SacConfig base = default_sac_config();
-  MlpConfig actor = base.actor, critic = base.critic;
-  actor.hidden = critic.hidden = {512, 512, 256};
-  d["actor"] = actor;
-  d["critic"] = critic;
-  return d;
-}
 
 nlohmann::json table_env_default_config() { return default_arm_env_config(ArmTask::Table); }
 nlohmann::json shelf_env_default_config() { return default_arm_env_config(ArmTask::Shelf); }

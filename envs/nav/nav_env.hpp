@@ -29,7 +29,7 @@
 #include "envs/nav/fetch_policy.hpp"
 #include "kernels/nav_constraints.hpp"
 #include "atacom/rng.hpp"
-#include "atacom/safe_env.hpp"
+#include "atacom/control_affine_env.hpp"
 #include "atacom/system.hpp"
 
 class b2World;

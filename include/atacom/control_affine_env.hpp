@@ -2,8 +2,8 @@
 //
 // A ControlAffineEnv exposes, for its current state, the pieces of
 // qdot = f(q) + G(q) a and of its constraints c(q, x) <= 0 (with J_q, J_x and
-// xdot of the uncontrollable state). Every safety layer (ATACOM's SafeEnv,
-// SafeLayerEnv) reads them; the same env runs unwrapped for plain RL.
+// xdot of the uncontrollable state). Every safety layer (the table of
+// include/atacom/safety_layer.hpp) reads them; the same env runs unwrapped for plain RL.
 #pragma once
 #include <vector>
 
@@ -20,10 +20,6 @@ class ControlAffineEnv : public BatchEnv {
   // into pb (sized for model and N). Must not allocate; may run concurrently
   // on disjoint ranges.
   virtual void constraint_model(ProjectorBatch& pb, int begin, int end) const = 0;
-  // SafeLayer's per-row threshold C_i = -delta_i (k values; empty: 0 on every
-  // row, the boundary c = 0 that ATACOM keeps, since the rows already carry
-  // the env's margins; docs/safelayer.md).
-  virtual std::vector<double> safelayer_threshold() const { return {}; }
 };
 
 }  // namespace atacom

@@ -10,28 +10,16 @@
 
 #include "atacom/env.hpp"
 #include "atacom/policy.hpp"
-#include "atacom/safety_layer.hpp"
 
 namespace atacom {
-
-struct EnvRequest {
-  std::string name;                                   // "pendulum", "table", "shelf", "nav", ...
-  int num_envs = 1;                                   // N
-  SafetyLayer safety = SafetyLayer::None;             // wrapper between the action source and the env
-  nlohmann::json config = nlohmann::json::object();   // overrides of default_env_config(name)
-};
 
 struct EnvEntry {
   std::string name;
   std::string help;
   bool has_constraints = false;  // a ControlAffineEnv: every safety layer can wrap it
   nlohmann::json (*default_config)();
-  // The plain env; make_env() adds the safety layer.
+  // The plain env; make_env() (atacom/make_env.hpp) adds the safety layer.
   std::unique_ptr<BatchEnv> (*make)(const nlohmann::json& resolved_config, int num_envs);
-  // Optional per-env SAC settings under a safety layer: a JSON object of
-  // SacConfig keys laid over default_sac_config() before a run config's own
-  // "sac" section (nullptr: the global defaults).
-  nlohmann::json (*default_sac)(SafetyLayer safety) = nullptr;
   // Optional: the family's linear attractor for a resolved config (raw
   // observations in, the env's normalised action out; nullptr: none).
   // Through a safety layer it is LA-ATACOM / LA-SafeLayer.
@@ -45,7 +33,6 @@ std::vector<std::string> env_names();
 const EnvEntry& env_entry(const std::string& name);
 // Default config, merged with overrides; unknown keys throw std::invalid_argument.
 nlohmann::json resolve_env_config(const std::string& name, const nlohmann::json& overrides);
-std::unique_ptr<BatchEnv> make_env(const EnvRequest& request);
 
 // Merge `overrides` into `base` recursively; every key of overrides must exist
 // in base (path named in the error), and JSON types must agree (numbers mix).

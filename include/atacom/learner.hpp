@@ -67,9 +67,9 @@ struct LearnerEntry {
   std::string name;     // "sac", "adversary"
   std::string section;  // the config.json section it owns ("sac", "adversary")
   std::string help;
-  // Defaults for an env under a safety layer (JSON; the env's own settings
-  // laid over the learner's global defaults).
-  nlohmann::json (*default_config)(const std::string& env, SafetyLayer safety);
+  // The one default factory's values (JSON). Per env x algorithm settings
+  // are presets (train/presets.hpp), laid over these by resolve_run_config.
+  nlohmann::json (*default_config)();
   // Validates a section (defaults with a file's keys laid over) and returns
   // it complete; throws std::invalid_argument naming a bad key.
   nlohmann::json (*resolve)(const nlohmann::json& section);

@@ -6,6 +6,8 @@
 #pragma once
 #include <memory>
 
+#include <nlohmann/json.hpp>
+
 #include "atacom/control_affine_env.hpp"
 #include "atacom/layered_env.hpp"
 #include "atacom/projector.hpp"
@@ -31,5 +33,8 @@ class SafeEnv final : public LayeredEnv {
   ProjectorModel model_;
   ProjectorBatch pb_;
 };
+
+// The table's wrap for "atacom" (no parameters: the env's projector model).
+std::unique_ptr<BatchEnv> wrap_atacom(std::unique_ptr<ControlAffineEnv> inner, const nlohmann::json& params);
 
 }  // namespace atacom

@@ -43,6 +43,7 @@ struct TrainConfig {
   int eval_episodes = 10;         // run in parallel, one env each
   bool eval_deterministic = true; // mean action (true) or sampled (false)
   int64_t checkpoint_every = 0;   // env steps between checkpoints; 0: at every evaluation
+  std::string preset = "paper";   // learner preset (train/presets.hpp) the other sections were laid over
 };
 // The one default factory.
 TrainConfig default_train_config();
@@ -53,15 +54,17 @@ struct RunConfig {
   TrainConfig train;
   nlohmann::json env;      // the env's resolved config (defaults + overrides)
   nlohmann::json learner;  // the learner's resolved section (null: the algorithm does not learn)
+  nlohmann::json safety;   // the safety layer's resolved parameters (an object; empty for layers without any)
   nlohmann::json host;     // where the run was computed: recorded, never read (null until a run writes it)
 };
-// Resolve a config file's content ({"env"?, "<learner section>"?, "train"?,
-// "host"?}; each section overrides defaults, anything else is rejected).
-// env is resolved against train.env's defaults; the learner section
-// (e.g. "sac") against the learner's defaults for the env and safety layer
-// of train.algo; a learner section of another learner, or one given to an
-// algorithm without a learner, is an error. "host" is accepted and kept
-// as it is (so DIR/config.json re-runs a run anywhere).
+// Resolve a config file's content ({"env"?, "<learner section>"?, "<layer
+// section>"?, "train"?, "host"?}; anything else is rejected). Lowest to
+// highest: the defaults (env, learner, layer, train), the fragment of the
+// preset train.preset for (train.env, train.algo) (train/presets.hpp), the
+// file's sections. A learner section of another learner, one given to an
+// algorithm without a learner, or a section of another safety layer is an
+// error. "host" is accepted and kept as it is (so DIR/config.json re-runs a
+// run anywhere; its preset then changes nothing, every key being explicit).
 RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* train_base = nullptr);
 nlohmann::json run_config_json(const RunConfig& c);
 // The safety layer of the run's algorithm.

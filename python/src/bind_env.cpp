@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/safe_env.hpp"
 #include "atacom/safety_layer.hpp"
 #include "bindings.hpp"

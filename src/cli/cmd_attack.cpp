@@ -82,8 +82,8 @@ const RegisterCommand reg{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto a = std::make_shared<AttackArgs>();
       a->o_env = app.add_option("--env", a->env, "env name (one with constraints: table, shelf, nav)");
-      a->o_safety = app.add_option("--safety", a->safety, "the layer under attack: atacom | safelayer | none")
-                        ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
+      a->o_safety = app.add_option("--safety", a->safety, "the layer under attack: " + safety_choices())
+                        ->check(CLI::IsMember(atacom::safety_layer_names()));
       a->o_steps = add_integer_flag(app, "--steps", a->steps, range::closed<int64_t>(1, limits::kMaxSteps),
                                     "env steps of the attack (all envs together)");
       a->o_seed = add_integer_flag(app, "--seed", a->seed, seed_range<int64_t>(), "random seed");

@@ -27,7 +27,7 @@ const RegisterCommand reg{
        app.add_option("--which", a->which, "final | best: the run's policy file (--policy trained)")
            ->check(CLI::IsMember({"final", "best"}));
        app.add_option("--safety", a->safety,
-                      "atacom | none | safelayer: the layer between policy and env (default atacom; with --policy "
+                      safety_choices() + ": the layer between policy and env (default atacom; with --policy "
                       "trained the run's)");
        add_integer_flag(app, "--seed", a->cfg.seed, seed_range<decltype(a->cfg.seed)>(), "seed of the env and the policy");
        app.add_option("--config", a->config_file, "JSON file with env config overrides");

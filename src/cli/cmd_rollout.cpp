@@ -54,8 +54,8 @@ atacom::cli::RegisterCommand reg(
        app.add_option("--which", a->which, "final | best: the run's policy file (--policy trained)")
            ->check(CLI::IsMember({"final", "best"}));
        a->o_safety = app.add_option("--safety", a->safety,
-                                    "none | atacom | safelayer (default atacom; with --policy trained the run's)")
-                         ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
+                                    atacom::cli::safety_choices() + " (default atacom; with --policy trained the run's)")
+                         ->check(CLI::IsMember(atacom::safety_layer_names()));
        a->o_atacom = app.add_option("--atacom", a->atacom, "on | off: the same as --safety atacom | none")
                          ->check(CLI::IsMember({"on", "off"}));
        using atacom::range::closed;

@@ -92,7 +92,7 @@ const RegisterCommand reg{{"shelf-real",
                                  ->check(CLI::IsMember({"final", "best"}));
                              o->o_safety = app.add_option("--safety", o->safety,
                                                           "none | atacom (default atacom; with --policy trained the run's)")
-                                               ->check(CLI::IsMember({"none", "atacom", "safelayer"}));
+                                               ->check(CLI::IsMember(atacom::safety_layer_names()));
                              o->o_atacom = app.add_option("--atacom", o->atacom, "on | off: the same as --safety atacom | none")
                                                ->check(CLI::IsMember({"on", "off"}));
                              add_integer_flag(app, "--trials", o->trials, range::closed(1, limits::kMaxShelfTrials),

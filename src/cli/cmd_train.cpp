@@ -18,6 +18,7 @@
 #include "src/core/fs_util.hpp"
 #include "src/core/limits.hpp"
 #include "train/algorithms.hpp"
+#include "train/presets.hpp"
 
 namespace atacom::cli {
 namespace {
@@ -26,7 +27,7 @@ volatile int g_checkpoint_signal = 0;
 extern "C" void on_checkpoint_signal(int) { g_checkpoint_signal = 1; }
 
 struct TrainArgs {
-  std::string env, algo, config, out, sdf;
+  std::string env, algo, config, out, sdf, preset;
   int64_t seed = 0, steps = 0;
   int envs = 0, eval_episodes = 0;
   bool resume = false;
@@ -47,6 +48,8 @@ int run(const TrainArgs& a) {
       throw std::invalid_argument("--config cannot be combined with --resume: the run's own config.json is used");
     if (!a.sdf.empty())
       throw std::invalid_argument("--sdf cannot be combined with --resume: the run's own config.json is used");
+    if (!a.preset.empty())
+      throw std::invalid_argument("--preset cannot be combined with --resume: the run's own config.json is used");
     rc = resolve_run_config(read_json_file(saved.string()));
     auto same = [](const CLI::Option* o, bool equal, const char* flag) {
       if (o && o->count() > 0 && !equal)
@@ -71,6 +74,7 @@ int run(const TrainArgs& a) {
     if (a.o_steps->count()) t["steps"] = a.steps;
     if (a.o_envs->count()) t["num_envs"] = a.envs;
     if (a.o_eval->count()) t["eval_episodes"] = a.eval_episodes;
+    if (!a.preset.empty()) t["preset"] = a.preset;
     if (!a.sdf.empty()) {
       if (!t.contains("env") || !t["env"].is_string())
         throw std::invalid_argument("--sdf needs the env named (--env or train.env in --config)");
@@ -124,7 +128,13 @@ const RegisterCommand reg{Command{
       a->o_eval = add_integer_flag(app, "--eval-episodes", a->eval_episodes, range::closed(1, limits::kMaxEvalEpisodes),
                                    "episodes per evaluation (default: train.eval_episodes)");
       for (CLI::Option* o : {a->o_seed, a->o_steps, a->o_envs, a->o_eval}) o->default_str("");
-      app.add_option("--config", a->config, "JSON file with env/<learner>/train sections overriding the defaults");
+      app.add_option("--config", a->config, "JSON file with env/<learner>/<layer>/train sections overriding the preset");
+      std::string presets;
+      for (const std::string& p : preset_names()) presets += (presets.empty() ? "" : " | ") + p;
+      app.add_option("--preset", a->preset,
+                     presets + ": per env x algorithm settings under the config file's (train.preset; default " +
+                         kDefaultPreset + ", the paper's protocol; configs/presets/)")
+          ->check(CLI::IsMember(preset_names()));
       app.add_option("--sdf", a->sdf, "analytic | learned: the distance fields of every object with a shipped model")
           ->check(CLI::IsMember({"analytic", "learned"}));
       app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();

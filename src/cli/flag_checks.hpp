@@ -11,10 +11,18 @@
 
 #include <CLI/CLI.hpp>
 
+#include "atacom/safety_layer.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/value_range.hpp"
 
 namespace atacom::cli {
+
+// "none | atacom | safelayer ...": the safety table's names, for --safety help texts.
+inline std::string safety_choices() {
+  std::string s;
+  for (const std::string& n : safety_layer_names()) s += (s.empty() ? "" : " | ") + n;
+  return s;
+}
 
 template <class T>
 CLI::Option* add_integer_flag(CLI::App& app, const std::string& name, T& target, const Range<T>& r,

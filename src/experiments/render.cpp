@@ -6,10 +6,10 @@
 #include <stdexcept>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/rng.hpp"
-#include "atacom/safe_env.hpp"
+#include "atacom/layered_env.hpp"
 #include "train/policy_source.hpp"
-#include "src/safety/safe_layer_env.hpp"
 #include "src/core/svg.hpp"
 #include "src/experiments/render_scene.hpp"
 #include "src/core/config_json.hpp"
@@ -143,10 +143,10 @@ RenderResult render_episode(const RenderConfig& cfg) {
   req.num_envs = 1;
   req.safety = src.safety;
   req.config = src.env_config;
+  req.safety_params = src.safety_params;
   std::unique_ptr<BatchEnv> env = make_env(req);
   const BatchEnv* plain = env.get();
-  if (const auto* safe = dynamic_cast<const SafeEnv*>(env.get())) plain = &safe->inner();
-  if (const auto* sl = dynamic_cast<const SafeLayerEnv*>(env.get())) plain = &sl->inner();
+  if (const auto* layered = dynamic_cast<const LayeredEnv*>(env.get())) plain = &layered->inner();
   const std::unique_ptr<RenderRecorder> rec = make_render_recorder(*plain);
   const EnvSpec& spec = env->spec();
   Policy& policy = src.bind(spec);

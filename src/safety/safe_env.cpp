@@ -37,4 +37,9 @@ void SafeEnv::write_info(int64_t i, float* info) const {
   info[1] = (pb_.status[i] & (kStatusBiasOutOfBounds | kStatusModelNonFinite)) ? 1.0f : 0.0f;
 }
 
+std::unique_ptr<BatchEnv> wrap_atacom(std::unique_ptr<ControlAffineEnv> inner, const nlohmann::json&) {
+  const ProjectorModel pm = inner->projector_model();
+  return std::make_unique<SafeEnv>(std::move(inner), pm);
+}
+
 }  // namespace atacom

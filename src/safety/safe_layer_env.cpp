@@ -38,4 +38,9 @@ void SafeLayerEnv::write_info(int64_t i, float* info) const {
   info[3] = (out_.status[i] & (kSafeLayerInfeasible | kSafeLayerModelNonFinite)) ? 1.0f : 0.0f;
 }
 
+std::unique_ptr<BatchEnv> wrap_safelayer(std::unique_ptr<ControlAffineEnv> inner, const nlohmann::json&) {
+  const SafeLayerModel sm = safelayer_model(inner->projector_model(), inner->spec().dt);
+  return std::make_unique<SafeLayerEnv>(std::move(inner), sm);
+}
+
 }  // namespace atacom

@@ -8,6 +8,8 @@
 #pragma once
 #include <memory>
 
+#include <nlohmann/json.hpp>
+
 #include "atacom/layered_env.hpp"
 #include "atacom/safelayer.hpp"
 
@@ -37,5 +39,10 @@ class SafeLayerEnv final : public LayeredEnv {
   ProjectorBatch pb_;
   SafeLayerBatch out_;
 };
+
+// The table's wrap for "safelayer" (no parameters: the rows linearised over
+// the env's own control period, threshold 0 on every row, since the rows
+// already carry the env's margins; docs/safelayer.md).
+std::unique_ptr<BatchEnv> wrap_safelayer(std::unique_ptr<ControlAffineEnv> inner, const nlohmann::json& params);
 
 }  // namespace atacom

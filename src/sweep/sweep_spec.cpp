@@ -8,6 +8,7 @@
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
 #include "train/algorithms.hpp"
+#include "train/presets.hpp"
 
 namespace atacom {
 
@@ -29,14 +30,6 @@ std::vector<std::string> name_list(ConfigReader& r, const char* key) {
     out.push_back(e.get<std::string>());
   }
   return out;
-}
-
-// a's objects merged with b's keys (b wins; objects merge recursively).
-void merge_into(nlohmann::json& a, const nlohmann::json& b) {
-  for (auto it = b.begin(); it != b.end(); ++it) {
-    if (it.value().is_object() && a.contains(it.key()) && a[it.key()].is_object()) merge_into(a[it.key()], it.value());
-    else a[it.key()] = it.value();
-  }
 }
 
 bool listed(const std::vector<std::string>& v, const std::string& s) {
@@ -72,6 +65,14 @@ SweepSpec parse_sweep_spec(const nlohmann::json& j) {
   }
   s.steps = r.integer<int64_t>("steps", range::closed<int64_t>(1, limits::kMaxSteps));
   r.get("num_envs", s.num_envs, range::closed(1, limits::kMaxEnvs));
+  r.get("preset", s.preset);
+  if (!s.preset.empty()) {
+    try {
+      find_preset(s.preset);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("sweep spec key 'preset': " + std::string(e.what()));
+    }
+  }
   r.get("description", s.description);
   if (const nlohmann::json* o = r.sub("overrides")) {
     if (!o->is_object()) throw std::invalid_argument("sweep spec key 'overrides' must be a JSON object");
@@ -88,7 +89,7 @@ SweepSpec parse_sweep_spec(const nlohmann::json& j) {
         throw std::invalid_argument(what + ": algo '" + printable_text(algo) + "' is not in 'algos'");
       if (!it.value().is_object()) throw std::invalid_argument(what + " must be a JSON object (a run config fragment)");
       if (const auto t = it.value().find("train"); t != it.value().end() && t->is_object())
-        for (const char* fixed : {"env", "algo", "seed", "steps", "num_envs"})
+        for (const char* fixed : {"env", "algo", "seed", "steps", "num_envs", "preset"})
           if (t->contains(fixed))
             throw std::invalid_argument(what + ": train." + fixed + " is set by the sweep spec, not by an override");
     }
@@ -109,6 +110,7 @@ SweepSpec parse_sweep_spec(const nlohmann::json& j) {
 nlohmann::json sweep_spec_json(const SweepSpec& s) {
   nlohmann::json j = {{"envs", s.envs}, {"algos", s.algos}, {"seeds", s.seeds}, {"steps", s.steps}};
   if (s.num_envs > 0) j["num_envs"] = s.num_envs;
+  if (!s.preset.empty()) j["preset"] = s.preset;
   if (!s.overrides.empty()) j["overrides"] = s.overrides;
   if (!s.description.empty()) j["description"] = s.description;
   return j;
@@ -119,17 +121,7 @@ std::vector<SweepCell> sweep_cells(const SweepSpec& s) {
   for (const auto& env : s.envs)
     for (const auto& algo : s.algos) {
       const Algorithm& a = find_algorithm(algo);
-      nlohmann::json base = nlohmann::json::object();
-      for (const std::string& key : {std::string("*/*"), env + "/*", "*/" + algo, env + "/" + algo}) {
-        if (!s.overrides.contains(key)) continue;
-        nlohmann::json o = s.overrides.at(key);
-        // A wildcard's learner sections reach the cells that train that learner only
-        // ("*/*": {"sac": ...} beside la runs); an exact "<env>/<algo>" key must fit its cell.
-        if (key.find('*') != std::string::npos)
-          for (const LearnerEntry& le : learner_entries())
-            if (le.name != a.learner) o.erase(le.section);
-        merge_into(base, o);
-      }
+      const nlohmann::json base = config_fragment(s.overrides, env, algo);
       for (int64_t seed : s.seeds) {
         SweepCell c;
         c.env = env;
@@ -145,6 +137,7 @@ std::vector<SweepCell> sweep_cells(const SweepSpec& s) {
         t["seed"] = seed;
         t["steps"] = s.steps;
         if (s.num_envs > 0) t["num_envs"] = s.num_envs;
+        if (!s.preset.empty()) t["preset"] = s.preset;
         out.push_back(std::move(c));
       }
     }

@@ -38,7 +38,8 @@ struct SweepSpec {
   std::vector<std::string> envs, algos;
   std::vector<int64_t> seeds;
   int64_t steps = 0;
-  int num_envs = 0;           // 0: the train default
+  int num_envs = 0;           // 0: the train default (or the preset's)
+  std::string preset;         // "": the train default ("paper"); else train.preset of every cell
   nlohmann::json overrides = nlohmann::json::object();
   std::string description;
 };
