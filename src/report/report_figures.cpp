@@ -128,7 +128,8 @@ std::string box_grid(const ReportData& d, const std::string& env, const std::vec
       if (m.censored) {
         size_t reached = 0;
         for (double y : v) reached += std::isfinite(y);
-        c.text(x, lo, std::to_string(reached) + "/" + std::to_string(v.size()) + " reached", 9, "middle", "#444");
+        c.label(c.px(x), c.py(lo) + 16, std::to_string(reached) + "/" + std::to_string(v.size()) + " reached", 10,
+                "middle", "#444");  // below the plot area
       }
     }
     body += placed(c, double(p % cols) * pw, top + double(p / cols) * ph);
