@@ -1,5 +1,6 @@
 #include "train/run_files.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -26,14 +27,22 @@ std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector
     cols.push_back(c);
   for (size_t c = 0; c < spec.info_names.size() && c < spec.info_reduce.size(); ++c)
     if (spec.info_reduce[c] == InfoReduce::Sum) cols.push_back("train_" + spec.info_names[c]);
+  cols.insert(cols.end(), target_columns().begin(), target_columns().end());
   return cols;
 }
 
-ProgressFile::ProgressFile(std::string path, std::vector<std::string> columns)
-    : path_(std::move(path)), columns_(std::move(columns)) {
-  for (const std::string& c : columns_) {
+const std::vector<std::string>& target_columns() {
+  static const std::vector<std::string> c = {"time_to_target_s", "steps_to_target", "updates_to_target",
+                                             "train_cost_to_target"};
+  return c;
+}
+
+ProgressFile::ProgressFile(std::string path, std::vector<std::string> columns, const std::vector<std::string>& blank_nan)
+    : path_(std::move(path)), columns_(std::move(columns)), blank_nan_(columns_.size(), 0) {
+  for (size_t k = 0; k < columns_.size(); ++k) {
     if (!header_.empty()) header_ += ',';
-    header_ += c;
+    header_ += columns_[k];
+    for (const std::string& b : blank_nan) blank_nan_[k] = blank_nan_[k] || b == columns_[k];
   }
 }
 
@@ -75,7 +84,7 @@ void ProgressFile::append(const std::vector<double>& row) {
   std::string line;
   for (size_t k = 0; k < row.size(); ++k) {
     if (k) line += ',';
-    line += format(row[k]);
+    if (!(blank_nan_[k] && std::isnan(row[k]))) line += format(row[k]);
   }
   lines_.push_back(line);
   values_.push_back(row);
@@ -95,7 +104,14 @@ void ProgressFile::restore(int64_t rows) {
     std::vector<double> v;
     std::istringstream ls(line);
     std::string cell;
-    while (std::getline(ls, cell, ',')) {
+    // getline drops an empty last cell: the line's cells are its commas + 1.
+    const size_t cells = size_t(std::count(line.begin(), line.end(), ',')) + 1;
+    while (v.size() < cells) {
+      if (!std::getline(ls, cell, ',')) cell.clear();
+      if (cell.empty() && v.size() < blank_nan_.size() && blank_nan_[v.size()]) {
+        v.push_back(NAN);
+        continue;
+      }
       char* end = nullptr;
       const double x = std::strtod(cell.c_str(), &end);
       if (cell.empty() || end != cell.c_str() + cell.size())
