@@ -13,6 +13,8 @@ namespace atacom {
 
 TrainConfig default_train_config() { return TrainConfig{}; }
 
+int64_t default_eval_every(int64_t steps) { return steps < 50000 ? 1000 : 10000; }
+
 void to_json(nlohmann::json& j, const TrainConfig& c) {
   j = nlohmann::json{{"env", c.env}, {"algo", c.algo}, {"seed", c.seed}, {"steps", c.steps},
                      {"num_envs", c.num_envs}, {"eval_every", c.eval_every}, {"eval_episodes", c.eval_episodes},
@@ -57,7 +59,10 @@ RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* trai
   ConfigReader r(file, "config");
   RunConfig c;
   c.train = train_base ? *train_base : default_train_config();
-  if (const auto* t = r.sub("train")) from_json(*t, c.train);
+  const nlohmann::json* t = r.sub("train");
+  if (t) from_json(*t, c.train);
+  if (!train_base && !(t && t->is_object() && t->contains("eval_every")))
+    c.train.eval_every = default_eval_every(c.train.steps);
   const nlohmann::json* e = r.sub("env");
   if (const auto* h = r.sub("host")) c.host = *h;  // a record of where a run was computed: kept, not read
   validate(c.train);
