@@ -60,3 +60,12 @@ TEST_CASE("progress.svg: an env without constraints or a goal gets the return pa
   CHECK(svg.find("evaluation return") != std::string::npos);
   CHECK(svg.find("violations") == std::string::npos);
 }
+
+TEST_CASE("progress.svg: the values as progress.csv holds them, so a resumed run draws the same bytes", "[progress_svg]") {
+  // A run that kept its rows in memory and one that read the first of them back from the CSV (9 digits).
+  const double d = 1.2562641234567891, d9 = 1.25626412;
+  const std::vector<std::string> cols = {"env_steps", "eval_return_mean", "eval_return_std", "final_distance"};
+  const auto kept = progress(cols, {{1000, -500.00000012345, 3, d}, {2000, -400, 3, d}, {3000, -300, 3, d}});
+  const auto resumed = progress(cols, {{1000, -500.000000, 3, d9}, {2000, -400, 3, d9}, {3000, -300, 3, d}});
+  CHECK(atacom::progress_svg("t", kept, false) == atacom::progress_svg("t", resumed, false));
+}

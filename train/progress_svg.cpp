@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <utility>
 #include <vector>
 
@@ -35,7 +36,7 @@ std::string panel(const std::string& title, const std::string& ylabel, const std
   for (const Curve& c : curves) extend(c.y);
   if (band_lo) extend(*band_lo), extend(*band_hi);
   if (!(y0 <= y1)) y0 = 0, y1 = 1;  // no finite value: an empty frame
-  if (y1 - y0 < 1e-9 * std::max(1.0, std::abs(y1))) {
+  if (y1 - y0 < 1e-6 * std::max(1.0, std::abs(y1))) {  // flat to 6 digits: a line in a padded frame
     const double pad = std::max(1.0, std::abs(y1) * 0.1);
     y0 -= y0 >= 0 && y0 < pad ? y0 : pad;  // a flat zero line sits on the axis
     y1 += pad;
@@ -72,8 +73,15 @@ std::string panel(const std::string& title, const std::string& ylabel, const std
 }  // namespace
 
 std::string progress_svg(const std::string& title, const ProgressFile& p, bool constrained) {
-  const std::vector<double> steps = p.series(p.column("env_steps"));
-  auto col = [&](const std::string& name) { return p.series(p.column(name)); };
+  // The values as progress.csv holds them (9 digits): a resumed run reads its
+  // first rows back from the file, and must draw the same picture as a run
+  // that kept them in memory.
+  auto col = [&](const std::string& name) {
+    std::vector<double> v = p.series(p.column(name));
+    for (double& x : v) x = std::strtod(ProgressFile::format(x).c_str(), nullptr);
+    return v;
+  };
+  const std::vector<double> steps = col("env_steps");
   std::vector<std::string> panels;
 
   const std::vector<double> mean = col("eval_return_mean"), sd = col("eval_return_std");

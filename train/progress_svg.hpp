@@ -11,8 +11,9 @@
 
 namespace atacom {
 
-// Panels for the columns `progress` holds (absent columns: no panel);
-// constrained: the env has constraints (the safety panels are drawn).
+// Panels for the columns `progress` holds (absent columns: no panel), drawn
+// from the values as progress.csv writes them, so a resumed run draws the
+// same bytes; constrained: the env has constraints (the safety panels).
 std::string progress_svg(const std::string& title, const ProgressFile& progress, bool constrained);
 
 }  // namespace atacom

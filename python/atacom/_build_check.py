@@ -26,12 +26,12 @@ def _where():
 
 def _advice(info):
     if info is None:
-        return ("build it (cmake --build build --target atacom_python, then PYTHONPATH=build/python) or install it "
+        return ("Build it (cmake --build build --target atacom_python, then PYTHONPATH=build/python) or install it "
                 "with `python3 -m pip install .`")
     if os.path.realpath(info.PYTHON_EXECUTABLE) != os.path.realpath(sys.executable):
-        return (f"run {info.PYTHON_EXECUTABLE}, or build for this interpreter: `{sys.executable} -m pip install .` "
+        return (f"Run {info.PYTHON_EXECUTABLE}, or build for this interpreter: `{sys.executable} -m pip install .` "
                 f"(or cmake -DPython_EXECUTABLE={sys.executable})")
-    return "rebuild the module (cmake --build build --target atacom_python)"
+    return "Rebuild the module (cmake --build build --target atacom_python)."
 
 
 def check_numpy():
