@@ -50,7 +50,11 @@ nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::j
   nlohmann::json out = base;
   for (auto it = overrides.begin(); it != overrides.end(); ++it) {
     const std::string key = path.empty() ? it.key() : path + "." + it.key();
-    if (!base.contains(it.key())) throw std::invalid_argument("unknown config key '" + printable_text(key) + "'");
+    if (!base.contains(it.key())) {
+      std::vector<std::string> valid;
+      for (auto b = base.begin(); b != base.end(); ++b) valid.push_back(b.key());
+      throw std::invalid_argument(unknown_key_message(key, path.empty() ? "config" : path, valid));
+    }
     const auto& b = base[it.key()];
     const auto& v = it.value();
     if (b.is_object()) {
