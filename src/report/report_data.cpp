@@ -26,6 +26,10 @@ const std::vector<ReportMetric>& report_metrics() {
       {"best.eval_return_mean", "return (best evaluation)", true, false},
       {"best.eval_discounted_return_mean", "discounted return (best evaluation)", true, false},
       {"best.final_distance", "final distance [m] (best evaluation)", false, false},
+      // HRI-Sim (absent elsewhere): the paper's "episodes in which a spill happens", at both angles.
+      {"spills", "episodes with a spill at 25 deg (final policy)", false, false},
+      {"spills_15", "episodes with a spill at 15 deg (final policy)", false, false},
+      {"min_human_distance", "closest approach to the human [m] (final policy)", true, false},
   };
   return m;
 }
