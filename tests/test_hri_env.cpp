@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/evaluate.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "envs/arm/arm_env.hpp"
@@ -183,6 +184,24 @@ TEST_CASE("hri: spills count episodes at 25 and 15 deg, starts hold the cup with
   CHECK(r[0] == 0.0f);
   CHECK(r[1] == 0.0f);
   (void)ni;
+}
+
+// The paper's figure is a count of episodes: the evaluation's `spills` is an
+// integer (a per-episode mean of 0/1 flags times the episodes, rounded).
+TEST_CASE("hri: the evaluation's spills and spills_15 count episodes", "[hri][fast]") {
+  const nlohmann::json cfg = {{"horizon", 120},
+                              {"sdf", {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}}}};
+  auto env = make_env({"hri", 7, SafetyLayer::Atacom, cfg});
+  auto la = make_attractor_policy("hri", resolve_env_config("hri", cfg));  // ignores the cup: it tilts
+  const EvalResult r = evaluate(*env, *la, 7, 3, true);
+  const nlohmann::json s = eval_json(r);
+  const double spills = s.at("spills").get<double>(), strict = s.at("spills_15").get<double>();
+  INFO("spills " << spills << ", spills_15 " << strict);
+  CHECK(spills == std::round(spills));
+  CHECK(strict == std::round(strict));
+  CHECK(spills >= 1);
+  CHECK(strict >= spills);  // every episode past 25 deg passed 15 deg
+  CHECK(strict <= 7);
 }
 
 // The human at real speed: between two env steps the replay advances one
@@ -397,24 +416,24 @@ TEST_CASE("hri: random alpha through ATACOM on held-out motion: 20x fewer human 
 }
 
 // The person does not avoid the robot and can corner the arm against a
-// joint limit with the cup upright: then no action inside the box corrects
-// every row (the projector reports atacom_bias_out) and a human row can leave
-// its tolerance. Measured: 1 human contact in 768k training-motion steps
-// (seeds 5-7), none on held-out motion; never a static collision or a spill.
-TEST_CASE("hri: 1.5M steps of random alpha through ATACOM on both motion splits: rows leave tolerance only when infeasible",
+// joint limit or the table: then no action inside the box corrects every row
+// (the projector reports atacom_bias_out) and a human row can leave its
+// tolerance. The paper's env (learned fields, the human in real time, no
+// upright row, so spills are not limited): random alpha, 3 seeds x 2 splits x
+// 256 envs x 500 steps. Measured: see INFO; at half speed (before issue 30)
+// 1 contact in 768k training-motion steps.
+TEST_CASE("hri: 768k steps of random alpha through ATACOM with the learned fields: rows leave tolerance only when infeasible",
           "[hri][slow]") {
-  long human_total = 0;
+  long human_total = 0, steps_total = 0;
   for (const char* split : {"train", "test"})
     for (uint64_t seed : {5u, 6u, 7u}) {
-      const int N = 512, steps = 500;
+      const int N = 256, steps = 500;
       auto env = make_env({"hri", N, SafetyLayer::Atacom, {{"hri", {{"split", split}}}}});
       env->seed(seed);
       const EnvSpec& s = env->spec();
       const int ni = int(s.info_names.size());
-      auto col = [&](const char* name) {
-        return int(std::find(s.info_names.begin(), s.info_names.end(), name) - s.info_names.begin());
-      };
-      const int col_c = col("collision"), col_h = col("human_collision"), col_s = col("spill"), col_b = col("atacom_bias_out");
+      const int col_c = info_col(s, "collision"), col_h = info_col(s, "human_collision"), col_s = info_col(s, "spill"),
+                col_b = info_col(s, "atacom_bias_out");
       Rng rng(seed + 100, 0);
       long static_hits = 0, human = 0, spills = 0, over_feasible = 0, over = 0;
       for (int t = 0; t < steps; ++t) {
@@ -435,10 +454,10 @@ TEST_CASE("hri: 1.5M steps of random alpha through ATACOM on both motion splits:
       INFO(split << " seed " << seed << ": human " << human << " static " << static_hits << " spills " << spills
                  << " steps over tolerance " << over << " (feasible " << over_feasible << ")");
       CHECK(static_hits == 0);
-      CHECK(spills == 0);
       CHECK(over_feasible == 0);
-      if (std::string(split) == "test") CHECK(human == 0);
       human_total += human;
+      steps_total += long(N) * steps;
     }
-  CHECK(human_total <= 3);  // <= 1 per 512 episodes
+  INFO("human contacts " << human_total << " in " << steps_total << " steps");
+  CHECK(human_total * 100000 <= steps_total);  // at most 1 per 100k steps (random alpha: 3 in 2M, docs/results.md)
 }
