@@ -53,10 +53,6 @@ std::string duration(double s) {
 
 nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-bool ends_with_collision(const std::string& name) {
-  return name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0;
-}
-
 class Run {
  public:
   Run(const RunConfig& cfg, const TrainOptions& opts);
@@ -415,7 +411,7 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
     const std::string& name = spec_.info_names[size_t(col)];
     s["train_" + name] = jnum(st_.train_info_sums[size_t(col)]);
     // Collision counts also under the plural names: train_collisions, ...
-    if (ends_with_collision(name) || name == "spill") s["train_" + name + "s"] = jnum(st_.train_info_sums[size_t(col)]);
+    if (!event_total_name(name).empty()) s["train_" + event_total_name(name)] = jnum(st_.train_info_sums[size_t(col)]);
   }
   if (learner_) {
     const nlohmann::json ls = learner_->summary();

@@ -88,9 +88,9 @@ atacom::cli::RegisterCommand reg(
     {"sdf-train", "train a learned signed distance field (ReDSDF) of an object from its exact geometry",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<SdfTrainArgs>();
-       app.add_option("--object", a->object, "table | shelf | human | tiago")
+       app.add_option("--object", a->object, "table | shelf | hri_table (HRI-Sim's table) | human | tiago")
            ->required()
-           ->check(CLI::IsMember({"table", "shelf", "human", "tiago"}));
+           ->check(CLI::IsMember({"table", "shelf", "hri_table", "human", "tiago"}));
        app.add_option("--out", a->out, "output directory (weights, manifest, progress.csv, learning curve)")->required();
        app.add_option("--config", a->config_file, "JSON overrides of the training config (see docs/sdf.md)");
        app.add_option("--hidden", a->hidden, "hidden widths, trunk first, e.g. 64,64,64,64");
