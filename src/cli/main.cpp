@@ -47,7 +47,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
+    // --help and --version exit 0; every usage error (an unknown flag, a value
+    // out of range, a missing option) exits 2, like every other input error.
+    const int rc = app.exit(e) == 0 ? 0 : 2;
     return stdout_written() ? rc : 2;
   }
   int rc = 1;
