@@ -72,7 +72,11 @@ int main(int argc, char** argv) {
   app.add_option("--atacom", atacom_s, "on, off or both")->check(CLI::IsMember({"on", "off", "both"}));
   cli::add_number_flag(app, "--repeats", repeats, range::closed(1, 10000), "timing rounds (best is kept)");
   cli::add_number_flag(app, "--round-seconds", round_s, range::open_closed(0.0, 600.0), "minimum seconds per timing round");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // a usage error exits 2, as every atacom command
+  }
   if (envs.empty())
     for (const EnvEntry& e : env_entries())
       if (e.has_constraints) envs.push_back(e.name);

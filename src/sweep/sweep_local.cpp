@@ -130,7 +130,8 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     const std::string rel = "inputs/" + cells[k].name() + ".json";
     require_no_links(dir, rel, "sweep directory");
     struct stat st;
-    if (::lstat((fs::path(dir) / rel).c_str(), &st) != 0) write_file_atomic((fs::path(dir) / rel).string(), cells[k].config().dump(2) + "\n");
+    if (::lstat((fs::path(dir) / rel).c_str(), &st) != 0)
+      write_file_atomic((fs::path(dir) / rel).string(), cells[k].config().dump(2) + "\n");
   }
 
   g_stop_signal.store(0);
