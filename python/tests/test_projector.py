@@ -118,5 +118,5 @@ def test_projector_outputs_are_read_only_inputs_writable():
     proj.alpha[...] = 1.0
     with pytest.raises(ValueError, match="read-only"):
         proj.a[...] = 0
-    with pytest.raises(ValueError, match="N must be >= 1"):
+    with pytest.raises(ValueError, match=r"N must be an integer in \[1, 2\^31 - 1\]"):
         atacom.Projector(0, 2, 2, 1)
