@@ -414,3 +414,60 @@ TEST_CASE("projector: skipping the slack outputs changes nothing else", "[projec
     for (double v : lean.slack_u) CHECK(v == -7.0);
   }
 }
+
+TEST_CASE("projector: correction-first bounds equal the reference and keep a inside the box", "[projector]") {
+  Rng rng(31, 5);
+  const Shape shapes[] = {{7, 7, 34, 0}, {3, 2, 5, 2}, {4, 3, 6, 1}, {2, 2, 3, 0}};
+  int scaled = 0;
+  for (const Shape& sh : shapes) {
+    for (int variant = 0; variant < 4; ++variant) {
+      ProjectorModel mod = random_model(rng, sh);
+      for (int i = 0; i < sh.k; ++i) mod.tol[i] = 1e-3;  // agreement to 1e-9 needs a conditioned J_u
+      mod.K_c = 30.0;
+      mod.bounds = variant % 2 ? BoundRule::CorrectionFirst : BoundRule::TangentScale;
+      if (variant >= 2 && sh.k > 1) mod.equality[0] = 1;  // the general path
+      const int N = 29;
+      ProjectorBatch B(mod, N);
+      for (int e = 0; e < N; ++e) fill_random(mod, B, e, rng, -0.3, 0.1);
+      project_batch(mod, B);
+      for (int e = 0; e < N; ++e) {
+        const ReferenceOutput ref = project_reference(mod, reference_input(mod, B, e));
+        INFO("shape m=" << sh.m << " k=" << sh.k << " variant " << variant << " env " << e);
+        const double scale = 1.0 + amax(ref.b.head(sh.m));
+        CHECK(max_abs_diff(B.a.data() + size_t(e) * sh.m, ref.a.data(), sh.m) <= 1e-9 * scale);
+        CHECK(max_abs_diff(B.slack_u.data() + size_t(e) * sh.k, ref.slack_u.data(), sh.k) <=
+              1e-7 * (1.0 + amax(ref.slack_u)));
+        CHECK(B.lambda[e] == ref.lambda);
+        CHECK(B.status[e] == ref.status);
+        const bool out = (ref.status & kStatusBiasOutOfBounds) != 0;
+        if (mod.bounds == BoundRule::CorrectionFirst) {
+          // Always inside the box; when b was outside, a is b scaled as a whole.
+          for (int j = 0; j < sh.m; ++j) CHECK(std::abs(B.a[size_t(e) * sh.m + j]) <= 1.0 + 1e-12);
+          if (out) {
+            const Eigen::VectorXd b = ref.b.head(sh.m);
+            const Eigen::VectorXd a = Eigen::Map<const Eigen::VectorXd>(B.a.data() + size_t(e) * sh.m, sh.m);
+            CHECK(amax(a - b / amax(b)) <= 1e-9 * scale);
+            ++scaled;
+          }
+        } else if (out) {
+          // The old rule hands the env b itself.
+          CHECK(amax(ref.a - ref.b.head(sh.m)) == 0.0);
+        }
+      }
+    }
+  }
+  CHECK(scaled > 20);
+}
+
+TEST_CASE("projector: the default factory and JSON carry the bound rule", "[projector]") {
+  ProjectorModel mod = default_projector_model(3, 2, 4, 0);
+  CHECK(mod.bounds == BoundRule::CorrectionFirst);
+  nlohmann::json j = mod;
+  CHECK(j.at("bounds") == "correction_first");
+  j["bounds"] = "tangent_scale";
+  CHECK(j.get<ProjectorModel>().bounds == BoundRule::TangentScale);
+  j.erase("bounds");
+  CHECK(j.get<ProjectorModel>().bounds == BoundRule::CorrectionFirst);
+  j["bounds"] = "clip";
+  CHECK_THROWS_WITH(j.get<ProjectorModel>(), Catch::Contains("unknown bound rule 'clip'"));
+}
