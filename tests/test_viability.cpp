@@ -7,7 +7,10 @@
 #include <cmath>
 #include <vector>
 
+#include "atacom/projector.hpp"
 #include "atacom/rng.hpp"
+#include "envs/arm/arm_env.hpp"
+#include "train/rollout.hpp"
 #include "train/viability_audit.hpp"
 
 using namespace atacom;
@@ -43,7 +46,51 @@ void grid_margin(int m, int k, const std::vector<double>& JG, const std::vector<
   }
 }
 
+// Steps ShelfEnvSim env 0 from q with alpha = 0 through the projector under
+// `rule`; returns the largest excess of any row over its tolerance.
+double worst_excess_from(const double* q, const double* goal, BoundRule rule, int steps, int* bias_steps) {
+  ArmEnv env(default_arm_env_config(ArmTask::Shelf), 1);
+  env.set_state(0, q, goal);
+  ProjectorModel pm = env.projector_model();
+  pm.bounds = rule;
+  ProjectorBatch pb(pm, 1);
+  const EnvSpec& spec = env.spec();
+  double worst = -INFINITY;
+  *bias_steps = 0;
+  for (int t = 0; t < steps; ++t) {
+    std::fill(pb.alpha.begin(), pb.alpha.end(), 0.0);
+    env.constraint_model(pb, 0, 1);
+    project_range(pm, pb, 0, 1);
+    *bias_steps += (pb.status[0] & kStatusBiasOutOfBounds) != 0;
+    env.step(pb.a.data());
+    for (int i = 0; i < spec.num_constraints; ++i)
+      worst = std::max(worst, env.buffers().constraints[size_t(i)] - spec.constraint_tolerance[size_t(i)]);
+  }
+  return worst;
+}
+
 }  // namespace
+
+TEST_CASE("viability: a shelf state where clipping the correction violates and correction-first does not",
+          "[viability]") {
+  // Issue 31: `atacom viability --env shelf --policy random --envs 4096
+  // --seed 777001 --bounds tangent_scale`, env 1012 before round 1409 (its
+  // pre-step observation): the gripper palm's row at 0.0177 (tolerance
+  // 0.02), two nearly dependent rows ask for a correction of |b| = 49.
+  // Clipped per component it took the row to 0.0249 and kept it above 0.02
+  // for 91 steps.
+  const double q[7] = {0.847972095, 1.08516324, 0.425349355, 1.8095082, -1.34062088, 0.0511496961, -0.093297042};
+  const double goal[3] = {0.646306455, -0.212720573, 0.888960302};
+  int bias_old = 0, bias_new = 0;
+  const double old_rule = worst_excess_from(q, goal, BoundRule::TangentScale, 40, &bias_old);
+  const double new_rule = worst_excess_from(q, goal, BoundRule::CorrectionFirst, 40, &bias_new);
+  INFO("worst excess over tolerance: tangent_scale " << old_rule << " (" << bias_old << " bias_out steps), "
+                                                     << "correction_first " << new_rule << " (" << bias_new << ")");
+  CHECK(bias_old > 0);
+  CHECK(bias_new > 0);
+  CHECK(old_rule > 0.003);
+  CHECK(new_rule <= 0.0);
+}
 
 TEST_CASE("viability: the exact first-order test agrees with brute force on small problems", "[viability]") {
   Rng rng(31, 0);

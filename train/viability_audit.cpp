@@ -138,11 +138,16 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
   std::vector<double> a_qp(m), a0(m, 0.0);
   const int od = spec.obs_dim;
   std::vector<float> obs_prev(csv ? size_t(N) * od : 0);  // the pre-step observations (CSV only)
+  // The reported rows before the step. An env may enforce stricter rows than
+  // it reports (nav: look-ahead and sweep); the analysis then moves each
+  // reported row with its layer row's Jacobian.
+  std::vector<double> c_rep_prev(size_t(N) * k);
   for (long r = 0; r < rounds; ++r) {
     const int active = static_cast<int>(std::min<long>(N, rc.steps - done_steps));
     policy->act(env->buffers().obs.data(), N, true, rng.data(), actions.data());
     std::copy(actions.begin(), actions.end(), pb.alpha.begin());
     if (csv) std::copy(env->buffers().obs.begin(), env->buffers().obs.end(), obs_prev.begin());
+    std::copy(env->buffers().constraints.begin(), env->buffers().constraints.end(), c_rep_prev.begin());
     parallel_blocks(N, 256, [&](int64_t lo, int64_t hi) {
       env->constraint_model(pb, int(lo), int(hi));
       project_range(pm, pb, int(lo), int(hi), {.store_slack = false});
@@ -197,7 +202,11 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
         if (pm.p > 0) F += in.Jx * in.xdot;
         Eigen::VectorXd a_app(m);
         for (int j = 0; j < m; ++j) a_app(j) = std::clamp(pb.a[size_t(i) * m + j], -1.0, 1.0);
-        const Eigen::VectorXd c_lin = in.c + spec.dt * (JG * a_app + F);
+        const Eigen::VectorXd c_rep = Eigen::Map<const Eigen::VectorXd>(&c_rep_prev[size_t(i) * k], k);
+        const Eigen::VectorXd c_lin = c_rep + spec.dt * (JG * a_app + F);
+        // Bounds on the layer's rows that keep the reported rows within tolerance.
+        Eigen::VectorXd bound(k);
+        for (int rr = 0; rr < k; ++rr) bound(rr) = spec.constraint_tolerance[rr] + in.c(rr) - c_rep(rr);
         const Eigen::VectorXd bvec = ref.b.head(m);
         const Eigen::VectorXd tvec = ref.N.topRows(m) * in.alpha.cwiseMax(-1.0).cwiseMin(1.0);
         // Which box component limited lambda (or left the box).
@@ -217,18 +226,18 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
         // Exact first-order test: an action in the box with
         // c + dt (J_G a + F) <= tolerance on every row (QP feasibility).
         const Eigen::Matrix<double, -1, -1, Eigen::RowMajor> JGr = JG;
-        const bool keep_exists = first_order_keep_exists(m, k, JGr.data(), in.c.data(), F.data(),
-                                                         spec.constraint_tolerance.data(), spec.dt, a0.data(), a_qp.data());
+        const bool keep_exists =
+            first_order_keep_exists(m, k, JGr.data(), in.c.data(), F.data(), bound.data(), spec.dt, a0.data(), a_qp.data());
         // Largest tangential scale whose first-order prediction keeps every row within tolerance.
         double keep_lambda = 1.0;
         for (int row = 0; row < k; ++row) {
-          const double base = in.c(row) + spec.dt * (JG.row(row).dot(bvec) + F(row)) - spec.constraint_tolerance[row];
+          const double base = c_rep(row) + spec.dt * (JG.row(row).dot(bvec) + F(row)) - spec.constraint_tolerance[row];
           const double slope = spec.dt * JG.row(row).dot(tvec);
           if (base > 0.0) keep_lambda = std::min(keep_lambda, slope < 0.0 ? base / -slope : -1.0);
           else if (slope > 0.0) keep_lambda = std::min(keep_lambda, -base / slope);
         }
         const int row = worst;
-        const double c_prev = in.c(row), c_post = b.constraints[size_t(i) * k + row];
+        const double c_prev = c_rep(row), c_post = b.constraints[size_t(i) * k + row];
         const double tol = spec.constraint_tolerance[row];
         const bool bias = (pb.status[i] & kStatusBiasOutOfBounds) != 0;
         std::string cls;
@@ -240,7 +249,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
         ++classes[cls];
         max_nonlinear = std::max(max_nonlinear, c_post - c_lin(row));
         int near = 0;
-        for (int rr = 0; rr < k; ++rr) near += in.c(rr) > -0.02;
+        for (int rr = 0; rr < k; ++rr) near += c_rep(rr) > -0.02;
         if (csv && records < cfg.max_records) {
           ++records;
           auto prev = [&](int back) {
@@ -275,7 +284,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
       if (b.done(i)) {
         for (int s = 0; s < kHistory; ++s) hist.round[size_t(i) * kHistory + s] = -1;
       } else {
-        std::copy_n(&pb.c[size_t(i) * k], k, &hist.c[slot * k]);
+        std::copy_n(&c_rep_prev[size_t(i) * k], k, &hist.c[slot * k]);
         hist.lambda[slot] = pb.lambda[i];
         hist.bias[slot] = (pb.status[i] & kStatusBiasOutOfBounds) != 0;
         hist.round[slot] = r;
