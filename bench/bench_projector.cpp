@@ -6,10 +6,12 @@
 // uncontrollable state. Extra lines measure the arm's diagonal G and the
 // machine's float64 FMA peak, so "gflops" can be read as a share of peak.
 //
-// Usage: bench_projector [--quick | --bound-pairs R]
+// Usage: bench_projector [--quick | --bound-pairs R | --bound-calls RULE C]
 //   --bound-pairs R: only the arm's case (diagonal G, a only, N = 16384,
 //   1 thread), the bound rules tangent_scale and correction_first measured
 //   in turn, R rounds (issue 31).
+//   --bound-calls RULE C: the same case, C calls with one rule and no
+//   timing, for instruction counts (perf stat -e instructions:u).
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -51,13 +53,18 @@ void fill(const ProjectorModel& mod, ProjectorBatch& B, uint64_t seed) {
 }
 
 // The bound rules in alternating rounds, so a shared host's load drifts over all alike.
-int bound_pairs(int rounds) {
+int bound_pairs(int rounds, const char* only = nullptr, int calls = 0) {
   set_num_threads(1);
   ProjectorModel mod = default_projector_model(7, 7, 34, 0);
   mod.g_form = GForm::Diagonal;
   mod.has_drift = false;
   ProjectorBatch B(mod, 16384);
   fill(mod, B, 2);
+  if (only) {
+    mod.bounds = parse_bound_rule(only);
+    for (int c = 0; c < calls; ++c) project_batch(mod, B, {.store_slack = false});
+    return 0;
+  }
   const char* names[] = {"tangent_scale", "correction_first"};
   for (int r = 0; r < rounds; ++r) {
     for (int v = 0; v < 2; ++v) {
@@ -77,6 +84,8 @@ int bound_pairs(int rounds) {
 
 int main(int argc, char** argv) {
   if (argc > 2 && std::strcmp(argv[1], "--bound-pairs") == 0) return bound_pairs(std::max(1, std::atoi(argv[2])));
+  if (argc > 3 && std::strcmp(argv[1], "--bound-calls") == 0)
+    return bound_pairs(1, argv[2], std::max(0, std::atoi(argv[3])));
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   const std::string cpu = bench::cpu_name();
   set_num_threads(1);

@@ -124,7 +124,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
     const std::string& name = spec.info_names[c];
     if (name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0) collision_cols.push_back(int(c));
   }
-  double collisions = 0.0;
+  std::vector<double> collision_sums(collision_cols.size(), 0.0);
   History hist;
   hist.resize(N, k, m);
   std::map<std::string, long> classes;
@@ -161,11 +161,14 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
         Eigen::VectorXd F = Eigen::VectorXd::Zero(k);
         if (pm.has_drift) F += in.Jq * in.f;
         if (pm.p > 0) F += in.Jx * in.xdot;
+        // A row no first-order layer can keep this step, whatever the
+        // other rows: F_i > |J_G,i|_1 + s_i / dt with s_i = max(-c_i, 0).
         bool over = false;
         for (int row = 0; row < k; ++row) {
           if (!(F(row) > 0.0)) continue;
           max_drift = std::max(max_drift, F(row));
-          over = over || F(row) > (in.Jq.row(row) * in.G).cwiseAbs().sum();
+          const double room = std::max(-in.c(row), 0.0) / spec.dt;
+          over = over || F(row) > (in.Jq.row(row) * in.G).cwiseAbs().sum() + room;
         }
         drift_over_escape += over;
       }
@@ -176,7 +179,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
       episodes += b.done(i);
       terminations += b.terminated[i] != 0;
       bias_steps += (pb.status[i] & kStatusBiasOutOfBounds) != 0;
-      for (int c : collision_cols) collisions += b.info[size_t(i) * ni + c];
+      for (size_t c = 0; c < collision_cols.size(); ++c) collision_sums[c] += b.info[size_t(i) * ni + collision_cols[c]];
       bool violated = false;
       int worst = -1;
       double worst_excess = 0.0;
@@ -292,9 +295,14 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
     }
     done_steps += active;
   }
+  // As run_rollout: every *collision column summed as "<name>s".
+  nlohmann::json coll = nlohmann::json::object();
+  coll["collisions"] = 0;
+  for (size_t c = 0; c < collision_cols.size(); ++c)
+    coll[spec.info_names[collision_cols[c]] + "s"] = static_cast<long>(std::llround(collision_sums[c]));
   nlohmann::json cls = nlohmann::json::object();
   for (const auto& [name, count] : classes) cls[name] = count;
-  return {{"env", src.env},
+  nlohmann::json out = {{"env", src.env},
           {"policy", rc.policy},
           {"bounds", bound_rule_name(pm.bounds)},
           {"envs", N},
@@ -302,7 +310,6 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
           {"steps", done_steps},
           {"episodes", episodes},
           {"terminations", terminations},
-          {"collisions", static_cast<long>(std::llround(collisions))},
           {"violations", violations},
           {"bias_out_steps", bias_steps},
           {"max_constraint", k ? nlohmann::json(max_c) : nlohmann::json(nullptr)},
@@ -310,6 +317,8 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
           {"classes", cls},
           {"max_drift_rate", max_drift},
           {"drift_over_escape_steps", drift_over_escape}};
+  out.update(coll);
+  return out;
 }
 
 }  // namespace atacom

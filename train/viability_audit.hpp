@@ -44,7 +44,10 @@ bool first_order_keep_exists(int m, int k, const double* JG, const double* c, co
 // part also get "max_drift_rate" (the largest rate F_i = J_q,i f + J_x,i
 // xdot at which the uncontrolled motion closes a row) and
 // "drift_over_escape_steps" (env-steps where some row closes faster than
-// |J_G,i|_1, the fastest retreat of that row inside the box). Throws std::invalid_argument for
+// |J_G,i|_1 + s_i / dt: |J_G,i|_1 is the fastest retreat of that row inside
+// the box, s_i = max(-c_i, 0) its room; no action keeps such a row at first
+// order). Collisions are counted as run_rollout does ("collisions", or
+// "<column>s" for every *collision info column). Throws std::invalid_argument for
 // an env without constraints or a policy other than random, zero or la.
 nlohmann::json run_viability_audit(const ViabilityAuditConfig& config);
 
