@@ -142,6 +142,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
   // it reports (nav: look-ahead and sweep); the analysis then moves each
   // reported row with its layer row's Jacobian.
   std::vector<double> c_rep_prev(size_t(N) * k);
+  std::vector<uint8_t> fresh(size_t(N), 1);  // 1: the env's episode starts with this step
   for (long r = 0; r < rounds; ++r) {
     const int active = static_cast<int>(std::min<long>(N, rc.steps - done_steps));
     policy->act(env->buffers().obs.data(), N, true, rng.data(), actions.data());
@@ -205,7 +206,10 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
         if (pm.p > 0) F += in.Jx * in.xdot;
         Eigen::VectorXd a_app(m);
         for (int j = 0; j < m; ++j) a_app(j) = std::clamp(pb.a[size_t(i) * m + j], -1.0, 1.0);
-        const Eigen::VectorXd c_rep = Eigen::Map<const Eigen::VectorXd>(&c_rep_prev[size_t(i) * k], k);
+        // After an autoreset the buffers still hold the last episode's rows:
+        // the new episode's first step starts from the layer's rows.
+        const Eigen::VectorXd c_rep =
+            fresh[size_t(i)] ? in.c : Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(&c_rep_prev[size_t(i) * k], k));
         const Eigen::VectorXd c_lin = c_rep + spec.dt * (JG * a_app + F);
         // Bounds on the layer's rows that keep the reported rows within tolerance.
         Eigen::VectorXd bound(k);
@@ -283,6 +287,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
         }
       }
       // History: this step's pre-step rows; an env that reset starts over.
+      fresh[size_t(i)] = b.done(i);
       const size_t slot = size_t(i) * kHistory + size_t(r % kHistory);
       if (b.done(i)) {
         for (int s = 0; s < kHistory; ++s) hist.round[size_t(i) * kHistory + s] = -1;
