@@ -137,8 +137,8 @@ TEST_CASE("viability: the exact first-order test agrees with brute force on smal
 
 TEST_CASE("viability: 1e7 random steps through ATACOM leave no static row above its tolerance", "[viability][slow]") {
   // Seed 777001 is issue 31's: before the correction-first bound rule, shelf
-  // had 87 violation steps in its first 6e6 steps (one env, a clipped
-  // correction that oscillated; docs/results.md).
+  // had 91 violation steps in its first 1e7 (one env, rounds 1409-1499, a
+  // clipped correction that oscillated; docs/results.md).
   for (const char* env : {"table", "shelf"}) {
     RolloutConfig rc;
     rc.env = env;

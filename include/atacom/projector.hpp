@@ -76,7 +76,7 @@ struct ProjectorModel {
   std::vector<uint8_t> equality;    // (k) 1: equality row, no slack column
   double K_c = 30.0;                // error-correction gain (1/dt at 30 Hz); 0 disables
   BasisType basis = BasisType::Projected;
-  BoundRule bounds = BoundRule::TangentScale;
+  BoundRule bounds = BoundRule::TangentScale;  // the factory sets CorrectionFirst (issue 31)
   GForm g_form = GForm::Dense;
   bool has_drift = true;            // false: f == 0 and the f array is ignored
 
@@ -86,7 +86,7 @@ struct ProjectorModel {
 };
 
 // The one default factory: SoftCorner, beta 3, tol 1e-6 on every row,
-// no equality rows, K_c 30, projected basis, dense G, with drift.
+// no equality rows, K_c 30, projected basis, CorrectionFirst, dense G, drift.
 ProjectorModel default_projector_model(int n, int m, int k, int p = 0);
 
 void to_json(nlohmann::json& j, const ProjectorModel& model);
