@@ -28,7 +28,7 @@ from ._arrays import MAX_BATCH, ControlAffineBatch, as_count, as_float64
 
 # Bits of the status array (ProjectorStatus in include/atacom/projector.hpp).
 STATUS_FLAGS = {
-    1: "bias_out_of_bounds",    # the correction alone is outside [-1, 1]^m: lambda = 0, a = b
+    1: "bias_out_of_bounds",    # the correction alone is outside [-1, 1]^m: lambda = 0, a = b scaled into the box
     2: "alpha_nonfinite",       # NaN/Inf in alpha: replaced by 0 (pure correction)
     4: "model_nonfinite",       # NaN/Inf in f, G, c, J or xdot: a = 0 (stop)
     8: "equality_rank_loss",    # equality rows dependent: solved in least squares
