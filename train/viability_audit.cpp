@@ -13,6 +13,7 @@
 
 #include "atacom/control_affine_env.hpp"
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/policy.hpp"
 #include "atacom/rng.hpp"
