@@ -33,7 +33,7 @@ std::string filter_method(const json& j) {
       throw std::invalid_argument("'method' must be \"atacom\" or \"safelayer\"");
     method = v.get<std::string>();
   }
-  static const char* atacom_only[] = {"slack", "beta", "tol", "K_c", "basis", "equality"};
+  static const char* atacom_only[] = {"slack", "beta", "tol", "K_c", "basis", "bounds", "equality"};
   static const char* safelayer_only[] = {"dt", "threshold"};
   if (method == "safelayer") {
     for (const char* key : atacom_only)
