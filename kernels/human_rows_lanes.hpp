@@ -38,7 +38,7 @@ static inline T capsule_distance(const T* a, const T* b, double inv_bb, double r
 
 // Smooth minimum over the 16 capsules of one point: distance d, gradient g =
 // dd/dp, rate ddt = dd/dt at fixed p (from the capsules' velocities), and the
-// exact minimum. The fold is the polynomial smooth min of src/core/sdf.hpp
+// exact minimum. The fold is the polynomial smooth min of kernels/sdf.hpp
 // (C1, never above the exact min, at most 15 k / 4 below it).
 template <class T>
 static inline T human_point_distance(const T (*A)[3], const T (*B)[3], const T (*VA)[3], const T (*VB)[3],

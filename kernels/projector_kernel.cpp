@@ -17,9 +17,10 @@
 // Smooth basis (no equality rows): the same lane kernel, plus N_a^{1/2} from
 // a per-lane cyclic Jacobi eigen-decomposition of N_a = R^-1 R^-T.
 //
-// General path (equality rows): the same m x m algebra per env with Eigen,
-// plus the k_e x k_e Schur complement of the equality rows and, for the
-// smooth basis, N_a^{1/2} (the action block of the Procrustes basis).
+// General path (equality rows, kernels/projector_general.cpp): the same m x m
+// algebra per env with Eigen, plus the k_e x k_e Schur complement of the
+// equality rows and, for the smooth basis, N_a^{1/2} (the action block of the
+// Procrustes basis).
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -38,79 +39,27 @@
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "kernels/lanes.hpp"
+#include "kernels/projector_general.hpp"
 
 namespace atacom {
 
 namespace {
 
-constexpr int kLanes = 8;        // one AVX-512 register of doubles
-constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count independent)
+using lanes::kLanes;             // one AVX-512 register of doubles
 
-// One lane vector: 8 envs' values of one element. GCC lowers arithmetic on
-// it to one AVX-512 instruction (or two AVX2 ones); writing the kernel in
-// this type, rather than in loops the vectoriser may reorder, pins the
-// vectorisation to the env dimension.
-typedef double V __attribute__((vector_size(kLanes * sizeof(double))));
-typedef long long VI __attribute__((vector_size(kLanes * sizeof(double))));
+// One lane vector: 8 envs' values of one element (kernels/lanes.hpp). Writing
+// the kernel in this type, rather than in loops the vectoriser may reorder,
+// pins the vectorisation to the env dimension.
+using V = lanes::vd;
+using VI = lanes::vm;
+using lanes::splat;
+using lanes::vexp;
+using lanes::vfinite;
+using lanes::vmax;
+using lanes::vmin;
+using lanes::vrecip;
+using lanes::vsqrt;
 
-inline V splat(double x) { return V{} + x; }
-inline V vmin(V a, V b) { return a < b ? a : b; }
-inline V vmax(V a, V b) { return a > b ? a : b; }
-inline VI vfinite(V x) { return (x - x) == 0.0; }  // false for NaN and +-Inf
-inline V vsqrt(V x) {
-  V r;  // GCC turns this into one vsqrtpd (sqrt cannot set errno here: -fno-math-errno)
-  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
-  return r;
-}
-
-// 1 / x for finite x > 0 (slack rates, R's diagonal). With AVX-512: the
-// 14-bit estimate refined by two Newton steps (relative error ~2^-56, at
-// most 1 ulp from the division) at a third of vdivpd's throughput cost,
-// which otherwise dominates the row pass.
-inline V vrecip(V x) {
-#if defined(__AVX512F__)
-  V r = (V)_mm512_maskz_rcp14_pd(0xFF, (__m512d)x);  // maskz: no undefined passthrough (GCC 12 warns)
-  r = r * (2.0 - x * r);
-  r = r * (2.0 - x * r);
-  return r;
-#else
-  return 1.0 / x;
-#endif
-}
-
-// exp(x) with a degree-13 Taylor polynomial after range reduction to
-// |r| <= ln2/2: relative error below 2e-16 (std::exp stays a scalar libm
-// call). Arguments are clamped to [-708, 709]; callers cap the result anyway.
-inline V vexp(V x) {
-  x = vmin(vmax(x, splat(-708.0)), splat(709.0));
-  const double kLog2e = 1.4426950408889634;
-  const double kLn2Hi = 6.93147180369123816490e-01;
-  const double kLn2Lo = 1.90821492927058770002e-10;
-  const double kShift = 6755399441055744.0;  // 1.5 * 2^52: round to nearest
-  const V t = x * kLog2e + kShift;
-  const V nf = t - kShift;
-  const V r = (x - nf * kLn2Hi) - nf * kLn2Lo;
-  V p = splat(1.0 / 6227020800.0);
-  p = p * r + 1.0 / 479001600.0;
-  p = p * r + 1.0 / 39916800.0;
-  p = p * r + 1.0 / 3628800.0;
-  p = p * r + 1.0 / 362880.0;
-  p = p * r + 1.0 / 40320.0;
-  p = p * r + 1.0 / 5040.0;
-  p = p * r + 1.0 / 720.0;
-  p = p * r + 1.0 / 120.0;
-  p = p * r + 1.0 / 24.0;
-  p = p * r + 1.0 / 6.0;
-  p = p * r + 0.5;
-  p = p * r + 1.0;
-  p = p * r + 1.0;
-  // 2^n through the exponent bits; n in [-1021, 1023] after the clamp.
-  const VI n = (VI)t - (VI)splat(kShift);
-  const V scale = (V)((n + 1023) << 52);
-  return p * scale;
-}
-
-inline bool finite(double x) { return std::isfinite(x); }
 
 // Software prefetch of a later block's inputs into L2, a few cache lines at a
 // time while the current block computes. At large N the batch streams from
@@ -188,8 +137,7 @@ struct LaneScratch {
 };
 
 // Env-major inputs to lane vectors and back: kernels/lanes.hpp's 8 x 8
-// register transposes (V is the same vector type as lanes::vd).
-static_assert(std::is_same_v<V, lanes::vd> && kLanes == lanes::kLanes);
+// register transposes.
 inline void gather_lanes(const double* const src[kLanes], int count, V* dst) { lanes::gather_rows(src, count, dst); }
 inline void scatter_lanes(const V* src, int count, double* const dst[kLanes]) { lanes::scatter_rows(src, count, dst); }
 
@@ -590,202 +538,6 @@ LaneFn lane_kernel_for(int m) {
   }
 }
 
-// Per-env scratch for the general path. Every matrix is sized once per
-// model shape; afterwards all products write into these buffers (noalias,
-// in-place solves), so the path does not allocate per call.
-struct GeneralScratch {
-  using Mat = Eigen::MatrixXd;
-  using Vec = Eigen::VectorXd;
-  using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  int n = -1, m = -1, k = -1, ke = -1, p = -1;
-  Mat JG, stack, R, Rinv, Minv, JE, MJ, S, Spinv, Na, T, A, V, VD, MJS;
-  Vec F, r, rate, z, g, alpha, b, t, a, rE, mu, d, Mg, JEMg;
-  Eigen::HouseholderQR<Mat> qr;
-
-  void setup(const ProjectorModel& mod) {
-    const int e = mod.num_equality();
-    if (mod.n == n && mod.m == m && mod.k == k && e == ke && mod.p == p) return;
-    n = mod.n; m = mod.m; k = mod.k; ke = e; p = mod.p;
-    const int ki = k - ke;
-    JG.resize(k, m); stack.resize(m + ki, m + 1); R.resize(m, m); Rinv.resize(m, m); Minv.resize(m, m);
-    JE.resize(ke, m); MJ.resize(m, ke); S.resize(ke, ke); Spinv.resize(ke, ke); Na.resize(m, m); T.resize(m, m);
-    MJS.resize(m, ke);
-    F.resize(k); r.resize(k); rate.resize(k); z.resize(m); g.resize(m); alpha.resize(m);
-    b.resize(m); t.resize(m); a.resize(m); rE.resize(ke); mu.resize(ke); Mg.resize(m); JEMg.resize(ke);
-    qr = Eigen::HouseholderQR<Mat>(m + ki, m + 1);
-  }
-};
-
-// Cyclic Jacobi eigen-decomposition of the symmetric A (overwritten): V holds
-// the eigenvectors (columns), d the eigenvalues. Small matrices only (m or the
-// number of equality rows); no allocation; sweeps until the off-diagonal mass
-// is below 1e-30 of the total (quadratic convergence: a handful of sweeps).
-void jacobi_eigen(Eigen::MatrixXd& A, Eigen::MatrixXd& V, Eigen::VectorXd& d) {
-  const Eigen::Index n = A.rows();
-  V.setIdentity(n, n);
-  for (int sweep = 0; sweep < 50; ++sweep) {
-    double off = 0.0, total = 0.0;
-    for (Eigen::Index i = 0; i < n; ++i)
-      for (Eigen::Index j = 0; j < n; ++j) (i == j ? total : off) += A(i, j) * A(i, j);
-    if (off <= 1e-30 * (total + off) || off == 0.0) break;
-    for (Eigen::Index p = 0; p < n - 1; ++p) {
-      for (Eigen::Index q = p + 1; q < n; ++q) {
-        const double apq = A(p, q);
-        if (apq == 0.0) continue;
-        const double theta = (A(q, q) - A(p, p)) / (2.0 * apq);
-        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
-        const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
-        for (Eigen::Index k = 0; k < n; ++k) {  // A <- J^T A J, columns then rows
-          const double akp = A(k, p), akq = A(k, q);
-          A(k, p) = c * akp - s * akq;
-          A(k, q) = s * akp + c * akq;
-        }
-        for (Eigen::Index k = 0; k < n; ++k) {
-          const double apk = A(p, k), aqk = A(q, k);
-          A(p, k) = c * apk - s * aqk;
-          A(q, k) = s * apk + c * aqk;
-        }
-        for (Eigen::Index k = 0; k < n; ++k) {
-          const double vkp = V(k, p), vkq = V(k, q);
-          V(k, p) = c * vkp - s * vkq;
-          V(k, q) = s * vkp + c * vkq;
-        }
-      }
-    }
-  }
-  d = A.diagonal();
-}
-
-// out = V f(lambda) V^T for the symmetric PSD X (eigenvalues below rel * max
-// count as zero); f = sqrt (smooth basis) or 1/x (pseudo-inverse).
-// Returns true when some eigenvalue was dropped.
-bool psd_function(GeneralScratch& W, const Eigen::MatrixXd& X, double rel, bool sqrt_fn, Eigen::MatrixXd& out) {
-  W.A = X;
-  jacobi_eigen(W.A, W.V, W.d);
-  const double emax = W.d.size() ? std::max(W.d.maxCoeff(), 0.0) : 0.0;
-  const double thr = emax * rel;
-  bool loss = false;
-  for (Eigen::Index i = 0; i < W.d.size(); ++i) {
-    const bool pos = W.d(i) > thr && W.d(i) > 0.0;
-    loss = loss || !pos;
-    W.d(i) = pos ? (sqrt_fn ? std::sqrt(W.d(i)) : 1.0 / W.d(i)) : 0.0;
-  }
-  W.VD = W.V;
-  for (Eigen::Index c = 0; c < W.VD.cols(); ++c) W.VD.col(c) *= W.d(c);
-  out.noalias() = W.VD * W.V.transpose();
-  return loss;
-}
-
-void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, GeneralScratch& W, bool store_basis,
-                         bool store_slack) {
-  using RowMap = Eigen::Map<const GeneralScratch::RowMat>;
-  using VecMap = Eigen::Map<const Eigen::VectorXd>;
-  const int n = mod.n, m = mod.m, k = mod.k, p = mod.p, ke = W.ke;
-  uint32_t status = 0;
-  const double* al = B.alpha.data() + size_t(e) * m;
-  for (int j = 0; j < m; ++j) {
-    double v = al[j];
-    if (!finite(v)) { v = 0.0; status |= kStatusAlphaNonFinite; }
-    W.alpha(j) = std::clamp(v, -1.0, 1.0);
-  }
-  const RowMap Jq(B.Jq.data() + size_t(e) * k * n, k, n);
-  if (mod.g_form == GForm::Diagonal)
-    W.JG.noalias() = Jq * VecMap(B.G.data() + size_t(e) * n, n).asDiagonal();
-  else
-    W.JG.noalias() = Jq * RowMap(B.G.data() + size_t(e) * n * m, n, m);
-  W.F.setZero();
-  if (mod.has_drift) W.F.noalias() += Jq * VecMap(B.f.data() + size_t(e) * n, n);
-  if (p > 0) W.F.noalias() += RowMap(B.Jx.data() + size_t(e) * k * p, k, p) * VecMap(B.xdot.data() + size_t(e) * p, p);
-
-  const double* c = B.c.data() + size_t(e) * k;
-  double s_dummy = 0.0;  // slack outputs not stored: write into a sink
-  double* s_out = store_slack ? B.s.data() + size_t(e) * k : nullptr;
-  auto s_at = [&](int i) -> double& { return s_out ? s_out[i] : s_dummy; };
-  // QR of [I, 0; A^-1 J_I, A^-1 r_I]: its R holds R with I + J_I^T W J_I =
-  // R^T R in the first m columns and z with J_I^T W r_I = R^T z in the last,
-  // without forming the products (as in the fast path).
-  W.stack.setZero();
-  W.stack.topLeftCorner(m, m).setIdentity();
-  for (int i = 0, ie = 0, ii = 0; i < k; ++i) {
-    if (mod.equality[i]) {
-      s_at(i) = 0.0;
-      W.r(i) = W.F(i) + mod.K_c * c[i];
-      W.JE.row(ie) = W.JG.row(i);
-      W.rE(ie++) = W.r(i);
-      continue;
-    }
-    const double s = slack_value(c[i], mod.tol[i]);
-    s_at(i) = s;
-    W.rate(i) = slack_rate(mod.slack[i], s, mod.beta[i], mod.tol[i]);
-    W.r(i) = W.F(i) + mod.K_c * (c[i] + s);
-    W.stack.row(m + ii).head(m) = W.JG.row(i) / W.rate(i);
-    W.stack(m + ii++, m) = W.r(i) / W.rate(i);
-  }
-
-  double* a_out = B.a.data() + size_t(e) * m;
-  double* us_out = store_slack ? B.slack_u.data() + size_t(e) * k : nullptr;
-  const bool model_ok = W.stack.allFinite() && W.r.allFinite() && W.JE.allFinite();
-  if (model_ok) {
-    W.qr.compute(W.stack);
-    W.z = W.qr.matrixQR().col(m).head(m);
-    W.R = W.qr.matrixQR().topLeftCorner(m, m).triangularView<Eigen::Upper>();
-    W.Rinv.setIdentity();
-    W.R.triangularView<Eigen::Upper>().solveInPlace(W.Rinv);
-    W.Minv.noalias() = W.Rinv * W.Rinv.transpose();
-    W.b.noalias() = -W.Rinv * W.z;
-    if (ke > 0) {
-      // Equality rows: the tangent space is restricted to null(J_E) in the
-      // M-metric. S = J_E M^-1 J_E^T; dependent rows are solved in least squares.
-      W.g.noalias() = W.R.transpose() * W.z;  // J_I^T W r_I
-      W.MJ.noalias() = W.Minv * W.JE.transpose();
-      W.S.noalias() = W.JE * W.MJ;
-      if (psd_function(W, W.S, 1e-12, false, W.Spinv)) status |= kStatusEqualityRankLoss;
-      W.MJS.noalias() = W.MJ * W.Spinv;
-      W.Na = W.Minv;
-      W.Na.noalias() -= W.MJS * W.MJ.transpose();
-      W.Mg.noalias() = W.Minv * W.g;
-      W.JEMg.noalias() = W.JE * W.Mg;
-      W.JEMg -= W.rE;
-      W.mu.noalias() = W.Spinv * W.JEMg;
-      W.b.noalias() = W.MJ * W.mu;
-      W.b -= W.Mg;
-    } else {
-      W.Na = W.Minv;
-    }
-    if (mod.basis == BasisType::Smooth) {
-      // Action block of the Procrustes basis: N_a^{1/2} (see docs/projector.md).
-      psd_function(W, W.Na, 1e-13, true, W.T);
-    } else {
-      W.T = W.Na;
-    }
-    W.t.noalias() = W.T * W.alpha;
-    bool bias_out = false;
-    const double lam = tangent_scale(W.b.data(), W.t.data(), m, &bias_out);
-    if (bias_out) status |= kStatusBiasOutOfBounds;
-    if (bias_out && mod.bounds == BoundRule::CorrectionFirst) W.b /= W.b.cwiseAbs().maxCoeff();
-    W.a = W.b + lam * W.t;
-    bool ok = W.a.allFinite();
-    for (int i = 0; i < (us_out ? k : 0); ++i) {
-      if (mod.equality[i]) { us_out[i] = 0.0; continue; }
-      us_out[i] = -(W.r(i) + W.JG.row(i).dot(W.a)) / W.rate(i);
-      ok = ok && finite(us_out[i]);
-    }
-    if (ok) {
-      for (int j = 0; j < m; ++j) a_out[j] = W.a(j);
-      B.lambda[e] = lam;
-      if (store_basis)
-        Eigen::Map<GeneralScratch::RowMat>(B.Na.data() + size_t(e) * m * m, m, m) = W.T;
-      B.status[e] = status;
-      return;
-    }
-  }
-  for (int j = 0; j < m; ++j) a_out[j] = 0.0;
-  for (int i = 0; i < (us_out ? k : 0); ++i) us_out[i] = 0.0;
-  B.lambda[e] = 0.0;
-  B.status[e] = status | kStatusModelNonFinite;
-  if (store_basis) std::fill_n(B.Na.data() + size_t(e) * m * m, size_t(m) * m, 0.0);
-}
-
 void check_batch(const ProjectorModel& mod, const ProjectorBatch& B) {
   const size_t N = static_cast<size_t>(B.N);
   const size_t gsz = mod.g_form == GForm::Diagonal ? size_t(mod.n) : size_t(mod.n) * mod.m;
@@ -821,9 +573,7 @@ void project_range(const ProjectorModel& mod, ProjectorBatch& B, int begin, int 
     if (!fn) fn = project_lanes<0>;
     for (int lo = begin; lo < end; lo += kLanes) fn(mod, B, lo, std::min(lo + kLanes, end), scratch, opt.store_basis, opt.store_slack);
   } else {
-    GeneralScratch& scratch = thread_scratch<GeneralScratch>();
-    scratch.setup(mod);
-    for (int e = begin; e < end; ++e) project_general_one(mod, B, e, scratch, opt.store_basis, opt.store_slack);
+    project_general_range(mod, B, begin, end, opt.store_basis, opt.store_slack);
   }
 }
 
@@ -835,7 +585,7 @@ void project_batch(const ProjectorModel& mod, ProjectorBatch& B, const ProjectOp
     project_range(mod, B, 0, B.N, opt);
     return;
   }
-  parallel_blocks(B.N, kBlockEnvs, [&](int64_t lo, int64_t hi) {
+  parallel_blocks(B.N, kEnvBlock, [&](int64_t lo, int64_t hi) {
     project_range(mod, B, static_cast<int>(lo), static_cast<int>(hi), opt);
   });
 }

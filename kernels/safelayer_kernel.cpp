@@ -17,7 +17,6 @@ namespace atacom {
 
 namespace {
 
-constexpr int kBlockEnvs = 256;  // envs per parallel task (thread-count independent)
 constexpr int kPrefetchBlocks = 2;  // lane blocks ahead
 // Software prefetch only for envs with more input than this: consecutive
 // envs' rows are one sequential stream per array, which the hardware
@@ -316,7 +315,7 @@ void safelayer_batch(const SafeLayerModel& mod, const ProjectorBatch& B, SafeLay
     safelayer_range(mod, B, O, 0, B.N, opt);
     return;
   }
-  parallel_blocks(B.N, kBlockEnvs, [&](int64_t lo, int64_t hi) {
+  parallel_blocks(B.N, kEnvBlock, [&](int64_t lo, int64_t hi) {
     safelayer_range(mod, B, O, static_cast<int>(lo), static_cast<int>(hi), opt);
   });
 }

@@ -1,10 +1,10 @@
 // Primitive distances written once for T = double (scalar API, ground truth)
 // and T = lanes::vd (SIMD across envs). Formulas and gradient conventions are
-// documented in src/core/sdf.hpp.
+// documented in kernels/sdf.hpp.
 #pragma once
 #include <cmath>
 
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 #include "kernels/lanes.hpp"
 
 namespace atacom::sdf_impl {

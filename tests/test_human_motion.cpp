@@ -20,7 +20,7 @@
 #include "envs/arm/arm_scene.hpp"
 #include "envs/arm/tiago_model.hpp"
 #include "src/core/data_dir.hpp"
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 
 using namespace atacom;
 

@@ -15,7 +15,7 @@
 #include "envs/arm/tiago_kinematics.hpp"
 #include "envs/arm/tiago_model.hpp"
 #include "kernels/human_kernels.hpp"
-#include "kernels/arm_fk_lanes.hpp"
+#include "envs/arm/arm_fk_lanes.hpp"
 #include "kernels/human_fk_lanes.hpp"
 #include "kernels/human_rows_lanes.hpp"
 

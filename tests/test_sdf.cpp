@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "atacom/rng.hpp"
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 #include "kernels/sdf_impl.hpp"
 
 using namespace atacom;

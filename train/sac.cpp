@@ -149,7 +149,7 @@ void sac_actor_act(Mlp<float>& actor, Tape<float>& tape, double log_std_min, dou
   const float* o = tape.value(out).data;
   const float lo = float(log_std_min), hi = float(log_std_max);
   // Per-row noise from the row's own stream: any block partition gives the same actions.
-  parallel_blocks(N, 1024, [&](int64_t b, int64_t e) {
+  parallel_blocks(N, kSampleBlock, [&](int64_t b, int64_t e) {
     for (int64_t i = b; i < e; ++i) {
       const float* r = o + i * 2 * A;
       for (int j = 0; j < A; ++j) {

@@ -6,7 +6,7 @@
 // shifted point, not the offset (so an offset that crosses a thin part or
 // lands near another part is still labelled right, and nothing needs the
 // reference's cleaning step). By default the union is the env's smooth union
-// (src/core/sdf.hpp): it never exceeds the exact distance, so a bound on
+// (kernels/sdf.hpp): it never exceeds the exact distance, so a bound on
 // learned - label is also a bound on learned - exact, and the field has no
 // kinks at the seams between parts (which made ATACOM overshoot there).
 #pragma once
@@ -16,7 +16,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 
 namespace atacom {
 

@@ -150,7 +150,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
     std::copy(actions.begin(), actions.end(), pb.alpha.begin());
     if (csv) std::copy(env->buffers().obs.begin(), env->buffers().obs.end(), obs_prev.begin());
     std::copy(env->buffers().constraints.begin(), env->buffers().constraints.end(), c_rep_prev.begin());
-    parallel_blocks(N, 256, [&](int64_t lo, int64_t hi) {
+    parallel_blocks(N, kEnvBlock, [&](int64_t lo, int64_t hi) {
       env->constraint_model(pb, int(lo), int(hi));
       project_range(pm, pb, int(lo), int(hi), {.store_slack = false});
     });

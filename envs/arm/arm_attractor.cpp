@@ -33,7 +33,7 @@ void ArmAttractorPolicy::act_one(const float* o, double* a) const {
 }
 
 void ArmAttractorPolicy::act(const float* obs, int N, bool, Rng*, double* actions) {
-  parallel_blocks(N, 64, [&](int64_t b, int64_t e) {
+  parallel_blocks(N, kEnvBlock, [&](int64_t b, int64_t e) {
     for (int64_t i = b; i < e; ++i) act_one(obs + i * obs_dim_, actions + i * kArmJoints);
   });
 }

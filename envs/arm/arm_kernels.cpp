@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "kernels/arm_env_kernel.hpp"
+#include "envs/arm/arm_env_kernel.hpp"
 #include "envs/arm/tiago_kinematics.hpp"
 #include "kernels/lanes.hpp"
 

@@ -2,7 +2,7 @@
 // ArmBatch&, env range) that write only the batch (and the env buffers they
 // are given); ArmEnv calls them over fixed parallel blocks
 // (kArmBlockEnvs). Inside, lane groups of 8 envs run the SIMD kernels of
-// kernels/arm_env_kernel.hpp. Beside them the scalar per-env reference
+// envs/arm/arm_env_kernel.hpp. Beside them the scalar per-env reference
 // (evaluate_reference, plain Eigen) that the batched path is tested against.
 #pragma once
 #include <atomic>

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "atacom/env.hpp"
+#include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
 #include "envs/arm/arm_env_config.hpp"
 #include "envs/arm/arm_rows.hpp"
@@ -21,7 +22,7 @@
 #include "envs/arm/human_motion.hpp"
 #include "envs/arm/human_rows.hpp"
 #include "envs/arm/tiago_model.hpp"
-#include "kernels/arm_env_kernel.hpp"
+#include "envs/arm/arm_env_kernel.hpp"
 
 namespace atacom {
 
@@ -29,7 +30,7 @@ constexpr int kArmObsDim = 16;                            // table / shelf obser
 constexpr int kHriObsExtra = 3 + 2 * kHumanCapsules * 3;  // cup axis, human capsule midpoints and their velocities
 constexpr int kHriObsDim = kArmObsDim + kHriObsExtra;     // 115
 
-constexpr int kArmBlockEnvs = 256;  // envs per parallel task: fixed, so results never depend on threads
+constexpr int kArmBlockEnvs = int(kEnvBlock);  // envs per parallel task (include/atacom/parallel.hpp)
 static_assert(kArmBlockEnvs % lanes::kLanes == 0, "lane groups must not straddle parallel blocks");
 
 // Info columns, in order (HRI appends four).

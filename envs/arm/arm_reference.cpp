@@ -1,6 +1,6 @@
 // Scalar per-env reference of the manipulation envs' batched evaluation:
 // FK, every row group with its Jacobian, the ground-truth check, in plain
-// Eigen on src/core/sdf shapes (no lane code), for tests and tools.
+// Eigen on kernels/sdf shapes (no lane code), for tests and tools.
 #include <algorithm>
 #include <cmath>
 #include <vector>

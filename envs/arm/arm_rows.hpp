@@ -16,7 +16,7 @@
 //
 // Seam for learned distance fields ("distance to a static scene object"):
 // the scene group's d and grad d come from one function,
-// lanes::arm_scene_distance_lanes (kernels/arm_env_kernel.hpp), and its
+// lanes::arm_scene_distance_lanes (envs/arm/arm_env_kernel.hpp), and its
 // scalar twin arm_scene_distance_reference (envs/arm/arm_reference.cpp).
 // A learned SDF replaces those two bodies (values and gradients per PoI, in
 // base_footprint); nothing else reads the scene's shapes for the rows (the

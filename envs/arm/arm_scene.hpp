@@ -15,7 +15,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 #include "envs/arm/tiago_model.hpp"
 
 namespace atacom {

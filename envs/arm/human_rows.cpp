@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 
 namespace atacom {
 

@@ -1,6 +1,6 @@
 // Row group "points of interest vs the human" and the exact human contact
 // check: the constant table of the batched kernels (kernels/human_kernels.hpp)
-// and slow, obvious scalar references (plain Eigen, src/core/sdf shapes)
+// and slow, obvious scalar references (plain Eigen, kernels/sdf shapes)
 // that the kernels are tested against.
 //
 // Row i of the group: c_i = delta_i - d_i(q, t) <= 0, where d_i is the
@@ -12,7 +12,7 @@
 // the projector compensates (docs/human.md).
 //
 // Smooth-minimum error (polynomial smooth min with parameter k = blend,
-// folded over the capsules in model order, src/core/sdf.hpp):
+// folded over the capsules in model order, kernels/sdf.hpp):
 //   min_j d_j - 15 k / 4  <=  d_i  <=  min_j d_j,
 // and d_i equals the exact minimum wherever the nearest capsule is at least
 // (M + 2) k / 4 = 4.5 k nearer than every other one (the capsules folded
@@ -48,7 +48,7 @@ struct HumanRowsReference {
 
 // One env: capsules from human_fk_reference (with velocities), PoI positions
 // (P) and Jacobians (P of 3 x nq). d and grad by union_distance of
-// src/core/sdf.hpp; dc/dt by central differences of it along the capsules'
+// kernels/sdf.hpp; dc/dt by central differences of it along the capsules'
 // velocities (step h seconds), so it shares no code with the kernel.
 HumanRowsReference human_rows_reference(const HumanModel& model, const HumanRowsConst& rows, const HumanFkResult& human,
                                         const std::vector<Eigen::Vector3d>& poi,
@@ -62,7 +62,7 @@ struct RobotPart {
 
 // Exact smallest surface distance between the robot parts and the human's
 // capsules (negative: penetration), by golden-section segment distances
-// (src/core/sdf.hpp segment_distance); contact when it is < 0.
+// (kernels/sdf.hpp segment_distance); contact when it is < 0.
 double human_min_distance_reference(const HumanModel& model, const HumanFkResult& human,
                                     const std::vector<RobotPart>& parts);
 

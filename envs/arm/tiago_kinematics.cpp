@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "kernels/arm_fk_lanes.hpp"
+#include "envs/arm/arm_fk_lanes.hpp"
 
 namespace atacom {
 

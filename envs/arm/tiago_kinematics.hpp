@@ -6,7 +6,7 @@
 //    cross-product Jacobians. Slow and obvious; the tests hold it against the
 //    published FK values and finite differences.
 //  - arm_fk_batch: structure-of-arrays over N envs, SIMD across envs (lane
-//    blocks of 8, kernels/arm_fk_lanes.hpp); the envs call the lane kernel
+//    blocks of 8, envs/arm/arm_fk_lanes.hpp); the envs call the lane kernel
 //    directly and never materialise these arrays.
 // Jacobian columns: revolute joint j with world axis z_j through o_j moves a
 // point p at z_j x (p - o_j); the orientation Jacobian column is z_j.

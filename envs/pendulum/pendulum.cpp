@@ -111,7 +111,7 @@ void PendulumEnv::step(const double* actions) {
   EnvBuffers& b = buffers_;
   const PendulumModel& p = model_;
   const int ninfo = static_cast<int>(spec_.info_names.size());
-  parallel_blocks(num_envs(), 4096, [&](int64_t lo, int64_t hi) {
+  parallel_blocks(num_envs(), kCheapEnvBlock, [&](int64_t lo, int64_t hi) {
     for (int64_t k = lo; k < hi; ++k) {
       const int i = static_cast<int>(k);
       const size_t s = size_t(i);

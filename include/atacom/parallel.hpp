@@ -12,6 +12,12 @@
 
 namespace atacom {
 
+// Task sizes, one place. Fixed (never derived from the thread count), so
+// per-env results never depend on threads; they tune speed only.
+constexpr int64_t kEnvBlock = 256;         // envs per task: env steps, projector, safety layers (model + scratch in L2)
+constexpr int64_t kSampleBlock = 1024;     // samples per task in light per-sample loops (action sampling)
+constexpr int64_t kCheapEnvBlock = 4096;   // envs per task for envs of a few dozen flops a step (pendulum)
+
 // Limit the worker count for the rest of the process (0 = all cores).
 void set_num_threads(int threads);
 int num_threads();

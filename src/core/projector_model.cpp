@@ -9,6 +9,7 @@
 
 #include "atacom/projector.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -109,36 +110,38 @@ void to_json(nlohmann::json& j, const ProjectorModel& model) {
 }
 
 void from_json(const nlohmann::json& j, ProjectorModel& model) {
-  static const char* known[] = {"n", "m", "k", "p", "slack", "beta", "tol", "equality",
-                                "K_c", "basis", "bounds", "g_form", "has_drift"};
-  if (!j.is_object()) throw std::invalid_argument("projector model: expected a JSON object");
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    if (std::find_if(std::begin(known), std::end(known), [&](const char* s) { return it.key() == s; }) ==
-        std::end(known))
-      throw std::invalid_argument("projector model: unknown key '" + printable_text(it.key()) + "'");
-  }
-  ProjectorModel out = default_projector_model(j.at("n").get<int>(), j.at("m").get<int>(), j.at("k").get<int>(),
-                                               j.value("p", 0));
-  if (j.contains("slack")) {
+  ConfigReader r(j, "projector");
+  const int dim_max = limits::kFilterMaxDim;
+  const int n = r.integer("n", range::closed(1, dim_max)), m = r.integer("m", range::closed(1, dim_max));
+  const int k = r.integer("k", range::closed(0, dim_max));
+  int p = 0;
+  r.get("p", p, range::closed(0, dim_max));
+  ProjectorModel out = default_projector_model(n, m, k, p);
+  std::vector<std::string> slack;
+  r.get("slack", slack);
+  if (r.sub("slack")) {
     out.slack.clear();
-    for (const auto& s : j.at("slack")) out.slack.push_back(parse_slack_type(s.get<std::string>()));
+    for (const auto& s : slack) out.slack.push_back(parse_slack_type(s));
   }
-  if (j.contains("beta")) out.beta = j.at("beta").get<std::vector<double>>();
-  if (j.contains("tol")) out.tol = j.at("tol").get<std::vector<double>>();
-  if (j.contains("equality")) {
-    out.equality.clear();
-    for (const auto& e : j.at("equality")) out.equality.push_back(e.get<bool>() ? 1 : 0);
+  r.get("beta", out.beta);
+  r.get("tol", out.tol);
+  std::vector<bool> equality;
+  r.get("equality", equality);
+  if (r.sub("equality")) out.equality.assign(equality.begin(), equality.end());
+  r.get("K_c", out.K_c);
+  std::string basis, bounds, g_form;
+  r.get("basis", basis);
+  if (!basis.empty()) out.basis = parse_basis_type(basis);
+  r.get("bounds", bounds);
+  if (!bounds.empty()) out.bounds = parse_bound_rule(bounds);
+  r.get("g_form", g_form);
+  if (r.sub("g_form")) {
+    if (g_form == "dense") out.g_form = GForm::Dense;
+    else if (g_form == "diagonal") out.g_form = GForm::Diagonal;
+    else throw std::invalid_argument("config key 'projector.g_form' must be 'dense' or 'diagonal'");
   }
-  if (j.contains("K_c")) out.K_c = j.at("K_c").get<double>();
-  if (j.contains("basis")) out.basis = parse_basis_type(j.at("basis").get<std::string>());
-  if (j.contains("bounds")) out.bounds = parse_bound_rule(j.at("bounds").get<std::string>());
-  if (j.contains("g_form")) {
-    const auto g = j.at("g_form").get<std::string>();
-    if (g == "dense") out.g_form = GForm::Dense;
-    else if (g == "diagonal") out.g_form = GForm::Diagonal;
-    else throw std::invalid_argument("projector model: g_form must be 'dense' or 'diagonal'");
-  }
-  if (j.contains("has_drift")) out.has_drift = j.at("has_drift").get<bool>();
+  r.get("has_drift", out.has_drift);
+  r.finish();
   out.validate();
   model = std::move(out);
 }

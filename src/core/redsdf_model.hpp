@@ -25,7 +25,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "train/tensor.hpp"
+#include "src/core/aligned_vector.hpp"
 
 namespace atacom {
 

@@ -11,6 +11,7 @@
 #include "src/core/svg.hpp"
 #include "atacom/system.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom {
 
@@ -119,7 +120,7 @@ nlohmann::json run_mode(const World& w, const DemoConfig& cfg, bool atacom,
   std::vector<double> maxc(N, -1e300);
   const auto t_start = std::chrono::steady_clock::now();
   for (int step = 0; step < cfg.steps; ++step) {
-    parallel_blocks(N, 256, [&](int64_t lo, int64_t hi) {
+    parallel_blocks(N, kEnvBlock, [&](int64_t lo, int64_t hi) {
       for (int64_t i = lo; i < hi; ++i) {
         if (r.hold[i] == 0) {
           r.alpha[2 * i] = r.rng[i].uniform(-1.0, 1.0);
@@ -203,14 +204,12 @@ void to_json(nlohmann::json& j, const DemoConfig& c) {
 
 void from_json(const nlohmann::json& j, DemoConfig& c) {
   DemoConfig d;
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    const std::string& k = it.key();
-    if (k == "envs") d.envs = it->get<int>();
-    else if (k == "steps") d.steps = it->get<int>();
-    else if (k == "seed") d.seed = it->get<uint64_t>();
-    else if (k == "trajectories") d.trajectories = it->get<int>();
-    else throw std::invalid_argument("demo config: unknown key '" + printable_text(k) + "'");
-  }
+  ConfigReader r(j, "demo");
+  r.get("envs", d.envs, range::closed(1, limits::kMaxEnvs));
+  r.get("steps", d.steps, range::closed(1, limits::kMaxHorizon));
+  r.get("seed", d.seed);
+  r.get("trajectories", d.trajectories, range::closed(0, limits::kMaxEnvs));
+  r.finish();
   c = d;
 }
 

@@ -6,7 +6,7 @@
 
 #include "envs/arm/arm_env.hpp"
 #include "envs/arm/tiago_kinematics.hpp"
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 #include "src/experiments/render_scene.hpp"
 
 namespace atacom {

@@ -9,7 +9,6 @@
 namespace atacom {
 
 namespace {
-constexpr int kBlock = 256;  // envs per task: constraint model + correction stay in cache together
 }
 
 LayeredEnv::LayeredEnv(std::unique_ptr<ControlAffineEnv> inner, const char* layer, std::string section,
@@ -48,7 +47,7 @@ void LayeredEnv::step(const double* actions) {
   take_actions(actions);
   // Constraint model and correction of one block run back to back, so the
   // Jacobians the env just wrote are still in cache when the layer reads them.
-  parallel_blocks(N, kBlock, [&](int64_t lo, int64_t hi) {
+  parallel_blocks(N, kEnvBlock, [&](int64_t lo, int64_t hi) {
     const auto t0 = profiling_ ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
     correct_range(static_cast<int>(lo), static_cast<int>(hi));
     if (profiling_)
@@ -61,7 +60,7 @@ void LayeredEnv::step(const double* actions) {
   // (a serial copy was about a tenth of the step at N = 4096).
   const int k = spec_.num_constraints;
   const size_t ni = spec_.info_names.size();
-  parallel_blocks(N, kBlock, [&](int64_t lo, int64_t hi) {
+  parallel_blocks(N, kEnvBlock, [&](int64_t lo, int64_t hi) {
     mirror_rows(static_cast<int>(lo), static_cast<int>(hi));
     for (int64_t i = lo; i < hi; ++i) {
       float* info = buffers_.info.data() + size_t(i) * ni + inner_info_;

@@ -1,14 +1,14 @@
 // Lane-block kernels of the manipulation envs: the constraint rows of
 // envs/arm/arm_rows.hpp with their Jacobians, and the ground-truth collision
 // check, for kLanes envs. Inputs are lane-major joint positions and the FK of
-// kernels/arm_fk_lanes.hpp (HRI: and the human's capsules).
+// envs/arm/arm_fk_lanes.hpp (HRI: and the human's capsules).
 #pragma once
 #include <vector>
 
 #include "envs/arm/arm_rows.hpp"
 #include "envs/arm/tiago_model.hpp"
-#include "src/core/sdf.hpp"
-#include "kernels/arm_fk_lanes.hpp"
+#include "kernels/sdf.hpp"
+#include "envs/arm/arm_fk_lanes.hpp"
 #include "kernels/human_rows_lanes.hpp"
 #include "kernels/lanes.hpp"
 #include "kernels/redsdf_human_lanes.hpp"

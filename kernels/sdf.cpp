@@ -1,4 +1,4 @@
-#include "src/core/sdf.hpp"
+#include "kernels/sdf.hpp"
 
 #include <algorithm>
 #include <cmath>
