@@ -79,6 +79,25 @@ std::pair<double, double> ref_ci(const std::vector<double>& v, int R, uint64_t s
   return {ref_quantile(st, 0.025), ref_quantile(st, 0.975)};
 }
 
+double ref_pi(const std::vector<double>& x, const std::vector<double>& y, bool higher) {
+  double wins = 0;
+  for (double a : x)
+    for (double b : y) wins += (higher ? a > b : a < b) ? 1.0 : a == b ? 0.5 : 0.0;
+  return wins / double(x.size() * y.size());
+}
+std::pair<double, double> ref_pi_ci(const std::vector<double>& x, const std::vector<double>& y, bool higher, int R,
+                                    uint64_t seed, const std::string& key) {
+  Rng rng(seed, fnv(key));
+  std::vector<double> st;
+  for (int r = 0; r < R; ++r) {
+    std::vector<double> sx, sy;
+    for (size_t i = 0; i < x.size(); ++i) sx.push_back(x[rng.below(x.size())]);
+    for (size_t i = 0; i < y.size(); ++i) sy.push_back(y[rng.below(y.size())]);
+    st.push_back(ref_pi(sx, sy, higher));
+  }
+  return {ref_quantile(st, 0.025), ref_quantile(st, 0.975)};
+}
+
 bool close(const std::string& text, double want) {
   const double got = std::stod(text);
   return std::abs(got - want) <= 1e-10 * std::max(1.0, std::abs(want));
@@ -187,6 +206,11 @@ TEST_CASE("report: the numbers equal a direct computation from the run files", "
       for (double b : y) wins += (higher ? a > b : a < b) ? 1.0 : a == b ? 0.5 : 0.0;
     REQUIRE(p.at("n_algo") == std::to_string(x.size()));
     REQUIRE(close(p.at("p_improvement"), wins / double(x.size() * y.size())));
+    const auto pci = ref_pi_ci(x, y, higher, 500, 11, "table/" + k + "/improvement/" + p.at("baseline"));
+    REQUIRE(close(p.at("p_ci_low"), pci.first));
+    REQUIRE(close(p.at("p_ci_high"), pci.second));
+    REQUIRE(std::stod(p.at("p_ci_low")) <= std::stod(p.at("p_improvement")));
+    REQUIRE(std::stod(p.at("p_improvement")) <= std::stod(p.at("p_ci_high")));
   }
 
   // Seed 2 fell 200 below its best return, seed 3 ended 0.5 m further than its best distance.

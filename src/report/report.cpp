@@ -76,6 +76,7 @@ struct Pi {
   std::string env, metric, baseline;
   size_t nx = 0, ny = 0;
   double p = NAN;
+  Interval ci{NAN, NAN};  // 95 % bootstrap interval of p
 };
 
 struct Drop {
@@ -125,8 +126,13 @@ std::vector<Pi> improvements(const ReportData& d) {
         const std::vector<double> x = metric_values(d, env, kMain, m.key), y = metric_values(d, env, base, m.key);
         if (x.empty() || y.empty()) continue;
         const bool enough = x.size() >= kMinSeeds && y.size() >= kMinSeeds;
-        out.push_back({env, m.key, base, x.size(), y.size(),
-                       enough ? probability_of_improvement(x, y, m.higher_better) : NAN});
+        Pi p{env, m.key, base, x.size(), y.size()};
+        if (enough) {
+          p.p = probability_of_improvement(x, y, m.higher_better);
+          p.ci = bootstrap_improvement_ci(x, y, m.higher_better, d.opts.resamples, d.opts.seed,
+                                          bootstrap_stream(env + "/" + m.key + "/improvement/" + base));
+        }
+        out.push_back(p);
       }
     }
   return out;
@@ -172,7 +178,8 @@ std::string methods_text(const ReportData& d) {
          std::to_string(d.opts.seed) + "; one task per cell, so stratified = within the cell; curves: " +
          std::to_string(d.opts.curve_resamples) +
          " resamples per evaluation). P(improvement) of atacom-sac over a baseline: Mann-Whitney form, over all "
-         "seed pairs 1 if atacom-sac is better, 1/2 if equal. Final-policy metrics are the last evaluation; "
+         "seed pairs 1 if atacom-sac is better, 1/2 if equal, with a 95% percentile-bootstrap interval (both algorithms' "
+         "seeds resampled). Final-policy metrics are the last evaluation; "
          "training metrics count over all training steps. A run is flagged when its final evaluation return is "
          "more than " + short_num(100 * d.opts.drop_return_frac) + "% of |best| below its best evaluation's, or its "
          "final distance more than " + short_num(d.opts.drop_distance) + " m above.";
@@ -233,10 +240,11 @@ ReportResult write_report(const ReportOptions& opts) {
             num(r.median) + "," + num(r.q1) + "," + num(r.q3) + "," + num(r.iqm) + "," + num(r.ci.low) + "," +
             num(r.ci.high) + "\n";
   write_file_atomic(out("time_to_target.csv"), tcsv);
-  std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement\n";
+  std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement,p_ci_low,p_ci_high\n";
   for (const Pi& p : pis)
     pcsv += p.env + "," + p.metric + "," + kMain + "," + p.baseline + "," + std::to_string(p.nx) + "," +
-            std::to_string(p.ny) + "," + num_or_empty(p.p) + "\n";
+            std::to_string(p.ny) + "," + num_or_empty(p.p) + "," + num_or_empty(p.ci.low) + "," +
+            num_or_empty(p.ci.high) + "\n";
   write_file_atomic(out("prob_improvement.csv"), pcsv);
   std::string fcsv = "env,algo,seed,final_return,best_return,best_env_steps,final_distance,best_final_distance,drop\n";
   for (const Drop& x : dr)
@@ -327,13 +335,14 @@ ReportResult write_report(const ReportOptions& opts) {
     bool any = false;
     for (const Pi& p : pis) any = any || p.env == env;
     if (any) {
-      md << "P(atacom-sac improves on the baseline):\n\n| baseline | metric | n | P(improvement) |\n|---|---|---|---|\n";
+      md << "P(atacom-sac improves on the baseline):\n\n| baseline | metric | n | P(improvement) [95% CI] |\n|---|---|---|---|\n";
       html << "<h3>P(atacom-sac improves on the baseline)</h3><table><tr><th>baseline</th><th>metric</th>"
-              "<th>n (atacom-sac, baseline)</th><th>P(improvement)</th></tr>\n";
+              "<th>n (atacom-sac, baseline)</th><th>P(improvement) [95% CI]</th></tr>\n";
       for (const Pi& p : pis) {
         if (p.env != env) continue;
         const bool enough = std::min(p.nx, p.ny) >= kMinSeeds;
-        const std::string pv = enough ? short_num(p.p) : no_stat(std::min(p.nx, p.ny), "P(improvement)");
+        const std::string pv = enough ? short_num(p.p) + " [" + short_num(p.ci.low) + ", " + short_num(p.ci.high) + "]"
+                                      : no_stat(std::min(p.nx, p.ny), "P(improvement)");
         md << "| " << p.baseline << " | " << p.metric << " (" << (metric_info(p.metric).higher_better ? "higher" : "lower")
            << " is better) | " << p.nx << ", " << p.ny << " | " << pv << " |\n";
         html << "<tr><td class=\"l\">" << p.baseline << "</td><td class=\"l\">" << p.metric << "</td><td>" << p.nx

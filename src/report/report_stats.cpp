@@ -72,6 +72,20 @@ Interval bootstrap_iqm_ci(const std::vector<double>& v, int resamples, uint64_t 
   return {quantile(stats, 0.025), quantile(stats, 0.975)};
 }
 
+Interval bootstrap_improvement_ci(const std::vector<double>& x, const std::vector<double>& y, bool higher_better,
+                                  int resamples, uint64_t seed, uint64_t stream) {
+  if (x.empty() || y.empty()) return {std::nan(""), std::nan("")};
+  Rng rng(seed, stream);
+  std::vector<double> stats(static_cast<size_t>(resamples));
+  std::vector<double> sx(x.size()), sy(y.size());
+  for (int r = 0; r < resamples; ++r) {
+    for (double& v : sx) v = x[rng.below(x.size())];
+    for (double& v : sy) v = y[rng.below(y.size())];
+    stats[size_t(r)] = probability_of_improvement(sx, sy, higher_better);
+  }
+  return {quantile(stats, 0.025), quantile(stats, 0.975)};
+}
+
 double probability_of_improvement(const std::vector<double>& x, const std::vector<double>& y, bool higher_better) {
   if (x.empty() || y.empty()) return std::nan("");
   double s = 0;

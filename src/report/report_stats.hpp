@@ -43,5 +43,10 @@ Interval bootstrap_iqm_ci(const std::vector<double>& v, int resamples, uint64_t 
 
 // P(X improves on Y); higher_better = false compares "less is better".
 double probability_of_improvement(const std::vector<double>& x, const std::vector<double>& y, bool higher_better);
+// Percentile-bootstrap 95 % interval of P(X improves on Y): each resample draws
+// x's seeds and then y's with replacement (stratified by algorithm), from one
+// stream.
+Interval bootstrap_improvement_ci(const std::vector<double>& x, const std::vector<double>& y, bool higher_better,
+                                  int resamples, uint64_t seed, uint64_t stream);
 
 }  // namespace atacom
