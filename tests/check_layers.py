@@ -23,8 +23,8 @@ DIR_LAYER = {
     "src/safety/": "safety",
     "train/": "learning",
     "src/experiments/": "experiments",
-    "src/sweep/": "experiments",
-    "src/report/": "experiments",
+    "src/experiments/": "experiments",
+    "src/experiments/": "experiments",
     "src/cli/": "front end",
     "python/src/": "front end",
 }

@@ -21,11 +21,11 @@
 
 #include "src/core/config_json.hpp"
 #include "src/core/svg.hpp"
-#include "src/report/report.hpp"
+#include "src/experiments/report.hpp"
 #include "src/safety/filter.hpp"
-#include "src/sweep/sweep_local.hpp"
-#include "src/sweep/sweep_spec.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_local.hpp"
+#include "src/experiments/sweep_spec.hpp"
+#include "src/experiments/sweep_state.hpp"
 #include "tests/shell_run.hpp"
 
 namespace fs = std::filesystem;

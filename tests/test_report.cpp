@@ -14,10 +14,10 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/rng.hpp"
-#include "src/report/report.hpp"
-#include "src/report/report_stats.hpp"
-#include "src/sweep/sweep_spec.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/report.hpp"
+#include "src/experiments/report_stats.hpp"
+#include "src/experiments/sweep_spec.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

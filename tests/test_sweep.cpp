@@ -16,8 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "run_dir_compare.hpp"
-#include "src/sweep/sweep_spec.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_spec.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

@@ -1,6 +1,6 @@
 // `atacom sweep --dry-run`: works without --out, writes nothing, prints no
 // paths it will not write, and estimates the cost from the measured rates
-// (src/sweep/sweep_cost.hpp, data/sweep_rates.json).
+// (src/experiments/sweep_cost.hpp, data/sweep_rates.json).
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -14,7 +14,7 @@
 #include "shell_run.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/data_dir.hpp"
-#include "src/sweep/sweep_cost.hpp"
+#include "src/experiments/sweep_cost.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

@@ -16,7 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "src/sweep/sweep_slurm.hpp"
+#include "src/experiments/sweep_slurm.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

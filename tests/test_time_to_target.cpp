@@ -16,8 +16,8 @@
 #include "atacom/make_env.hpp"
 #include "atacom/evaluate.hpp"
 #include "atacom/trainer.hpp"
-#include "src/sweep/sweep_spec.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_spec.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

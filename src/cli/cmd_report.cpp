@@ -1,9 +1,9 @@
-// atacom report DIR: statistics, figures and an HTML page of a sweep (src/report/).
+// atacom report DIR: statistics, figures and an HTML page of a sweep (src/experiments/).
 #include <iostream>
 
 #include "cli/command.hpp"
 #include "cli/flag_checks.hpp"
-#include "src/report/report.hpp"
+#include "src/experiments/report.hpp"
 
 namespace atacom::cli {
 namespace {

@@ -8,10 +8,10 @@
 #include "cli/command.hpp"
 #include "cli/flag_checks.hpp"
 #include "src/core/config_json.hpp"
-#include "src/sweep/sweep_local.hpp"
-#include "src/sweep/sweep_slurm.hpp"
-#include "src/sweep/sweep_spec.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_local.hpp"
+#include "src/experiments/sweep_slurm.hpp"
+#include "src/experiments/sweep_spec.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 namespace atacom::cli {
 namespace {

@@ -15,9 +15,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "src/report/report.hpp"
-#include "src/sweep/sweep_spec.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/report.hpp"
+#include "src/experiments/sweep_spec.hpp"
+#include "src/experiments/sweep_state.hpp"
 #include "tests/fuzz/fuzz_target.hpp"
 
 namespace fs = std::filesystem;

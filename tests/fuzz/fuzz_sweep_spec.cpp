@@ -7,7 +7,7 @@
 #include <string>
 
 #include "src/core/config_json.hpp"
-#include "src/sweep/sweep_spec.hpp"
+#include "src/experiments/sweep_spec.hpp"
 #include "tests/fuzz/fuzz_target.hpp"
 
 namespace {

@@ -18,9 +18,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "src/sweep/sweep_slurm.hpp"
-#include "src/sweep/sweep_spec.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_slurm.hpp"
+#include "src/experiments/sweep_spec.hpp"
+#include "src/experiments/sweep_state.hpp"
 #include "tests/fuzz/fuzz_target.hpp"
 
 namespace fs = std::filesystem;

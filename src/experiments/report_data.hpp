@@ -1,4 +1,4 @@
-// The runs of a sweep as the report reads them (internal to src/report/).
+// The runs of a sweep as the report reads them (internal to src/experiments/).
 #pragma once
 #include <optional>
 #include <string>
@@ -6,8 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "src/report/report.hpp"
-#include "src/sweep/sweep_spec.hpp"
+#include "src/experiments/report.hpp"
+#include "src/experiments/sweep_spec.hpp"
 
 namespace atacom {
 

@@ -1,4 +1,4 @@
-#include "src/sweep/sweep_local.hpp"
+#include "src/experiments/sweep_local.hpp"
 
 #include <fcntl.h>
 #include <sched.h>
@@ -24,8 +24,8 @@
 
 #include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
-#include "src/sweep/sweep_cost.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_cost.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 namespace fs = std::filesystem;
 

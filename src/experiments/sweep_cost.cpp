@@ -1,4 +1,4 @@
-#include "src/sweep/sweep_cost.hpp"
+#include "src/experiments/sweep_cost.hpp"
 
 #include <cmath>
 #include <map>

@@ -1,4 +1,4 @@
-#include "src/sweep/sweep_spec.hpp"
+#include "src/experiments/sweep_spec.hpp"
 
 #include <set>
 #include <stdexcept>

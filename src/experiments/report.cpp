@@ -1,5 +1,5 @@
 // atacom report: tables (CSV, Markdown), figures (SVG) and one HTML page.
-#include "src/report/report.hpp"
+#include "src/experiments/report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,8 +12,8 @@
 #include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/core/svg.hpp"
-#include "src/report/report_data.hpp"
-#include "src/report/report_stats.hpp"
+#include "src/experiments/report_data.hpp"
+#include "src/experiments/report_stats.hpp"
 
 namespace fs = std::filesystem;
 

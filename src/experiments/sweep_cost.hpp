@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "src/sweep/sweep_spec.hpp"
+#include "src/experiments/sweep_spec.hpp"
 
 namespace atacom {
 

@@ -2,7 +2,7 @@
 // at a time (each a fresh process of the same binary, so one run crashing or
 // being killed never takes the sweep down), T threads each.
 //
-// Every start looks at the run files first (src/sweep/sweep_state.hpp): a
+// Every start looks at the run files first (src/experiments/sweep_state.hpp): a
 // done cell is skipped, a cell with a checkpoint resumes (`train --resume`),
 // any other is started from an empty directory (a run killed before its
 // first checkpoint has nothing to continue from, and restarting it from
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "src/sweep/sweep_spec.hpp"
+#include "src/experiments/sweep_spec.hpp"
 
 namespace atacom {
 

@@ -1,4 +1,4 @@
-#include "src/sweep/sweep_slurm.hpp"
+#include "src/experiments/sweep_slurm.hpp"
 
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -13,7 +13,7 @@
 
 #include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 namespace fs = std::filesystem;
 

@@ -1,5 +1,5 @@
 // Reading a sweep directory for the report: every cell of its spec, finished or not.
-#include "src/report/report_data.hpp"
+#include "src/experiments/report_data.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -8,7 +8,7 @@
 
 #include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 namespace fs = std::filesystem;
 

@@ -1,4 +1,4 @@
-#include "src/report/report_stats.hpp"
+#include "src/experiments/report_stats.hpp"
 
 #include <algorithm>
 #include <cmath>

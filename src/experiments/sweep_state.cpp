@@ -1,4 +1,4 @@
-#include "src/sweep/sweep_state.hpp"
+#include "src/experiments/sweep_state.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>

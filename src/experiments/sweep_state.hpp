@@ -27,7 +27,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "src/sweep/sweep_spec.hpp"
+#include "src/experiments/sweep_spec.hpp"
 
 namespace atacom {
 

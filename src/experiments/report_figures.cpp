@@ -5,8 +5,8 @@
 #include <map>
 
 #include "src/core/svg.hpp"
-#include "src/report/report_data.hpp"
-#include "src/report/report_stats.hpp"
+#include "src/experiments/report_data.hpp"
+#include "src/experiments/report_stats.hpp"
 #include "train/algorithms.hpp"
 
 namespace atacom {

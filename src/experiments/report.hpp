@@ -1,5 +1,5 @@
 // atacom report DIR: the statistics and figures of a sweep directory
-// (src/sweep/sweep_state.hpp), written to DIR/report/:
+// (src/experiments/sweep_state.hpp), written to DIR/report/:
 //   summary.csv           env, algo, metric, n, mean, std, median, q1, q3, iqm, iqm_ci_low, iqm_ci_high
 //                         (metric = the summary.json key; "best.<key>" for the best evaluation)
 //   time_to_target.csv    env, algo, metric, n, reached, median, q1, q3, iqm, iqm_ci_low, iqm_ci_high for
@@ -13,7 +13,7 @@
 //                         never met it drawn on a "not reached" line, "reached k/n" under each box
 //   curves_<env>.svg      eval return and final distance vs env steps: IQM over seeds, bootstrap band
 //   index.html            figures and tables in one page (inline SVG: opens from file://, no network)
-// Statistics: src/report/report_stats.hpp.
+// Statistics: src/experiments/report_stats.hpp.
 #pragma once
 #include <cstdint>
 #include <string>
