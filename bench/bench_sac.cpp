@@ -281,11 +281,13 @@ double bench_fma_peak(int threads, bool print = true) {
 // seconds per update); gflops: every GEMM of the update as the tapes run
 // them; share_of_fma_peak: gflops over fma_peak's per-thread rate x threads,
 // measured in this process just before.
-void bench_ppo_update(int N, int T, const std::vector<int>& hidden, int minibatch, int threads, double fma_gflops) {
+void bench_ppo_update(int N, int T, const std::vector<int>& hidden, Activation act, int minibatch, int threads,
+                      double fma_gflops) {
   set_num_threads(threads);
   const int D = 16, A = 7;
   PpoConfig cfg = default_ppo_config();
   cfg.actor.hidden = cfg.critic.hidden = hidden;
+  cfg.actor.activation = cfg.critic.activation = act;
   cfg.rollout_steps = T;
   cfg.minibatch_size = minibatch;
   Ppo ppo(D, A, cfg, 1);
@@ -308,7 +310,8 @@ void bench_ppo_update(int N, int T, const std::vector<int>& hidden, int minibatc
   const double flops = ppo.gemm_flops() - f0;
   const double calls = best_rate(update);
   const double gflops = flops * calls * 1e-9;
-  bench::emit({{"bench", "ppo_update"}, {"obs", D}, {"act", A}, {"hidden", hidden}, {"N", N}, {"T", T},
+  bench::emit({{"bench", "ppo_update"}, {"obs", D}, {"act", A}, {"hidden", hidden},
+               {"activation", activation_name(act)}, {"N", N}, {"T", T},
                {"epochs", cfg.epochs}, {"minibatch", minibatch}, {"threads", threads},
                {"per_s", calls * double(N) * T * cfg.epochs}, {"updates_per_s", calls}, {"flops", flops},
                {"gflops", gflops}, {"share_of_fma_peak", gflops / (fma_gflops * threads)}, {"cpu", bench::cpu_name()}});
@@ -362,9 +365,17 @@ int main(int argc, char** argv) {
   if (want("ppo_update"))
     for (int threads : thread_list) {
       const double peak = bench_fma_peak(threads, false);
-      // The shipped networks (train/ppo_learner.cpp, ppo_default_config) at 1024 envs x T 32.
-      for (const std::vector<int>& h : {std::vector<int>{64, 64}, std::vector<int>{256, 256}})
-        bench_ppo_update(1024, 32, h, batch_only ? batch_only : 4096, threads, peak);
+      // The shipped setting (ppo_default_config and --envs 128: 64-64 ReLU, T 16,
+      // minibatches of 512), the same at 256-256, and large rollouts and
+      // minibatches (1024 envs x T 32, 4096) with ReLU and tanh.
+      struct Case { int N, T; std::vector<int> hidden; Activation act; int minibatch; };
+      const std::vector<Case> cases = {{128, 16, {64, 64}, Activation::Relu, 512},
+                                        {128, 16, {256, 256}, Activation::Relu, 512},
+                                        {1024, 32, {64, 64}, Activation::Relu, 4096},
+                                        {1024, 32, {64, 64}, Activation::Tanh, 4096},
+                                        {1024, 32, {256, 256}, Activation::Relu, 4096}};
+      for (const Case& c : cases)
+        bench_ppo_update(c.N, c.T, c.hidden, c.act, batch_only ? batch_only : c.minibatch, threads, peak);
     }
   if (want("actor_act"))
     for (int threads : thread_list)

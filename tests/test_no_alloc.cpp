@@ -14,6 +14,8 @@
 #include "atacom/projector.hpp"
 #include "kernels/redsdf_batch.hpp"
 #include "atacom/rng.hpp"
+#include "atacom/env_registry.hpp"
+#include "train/ppo_learner.hpp"
 #include "build_kind.hpp"
 
 #if ATACOM_TEST_SANITIZED
@@ -163,5 +165,45 @@ TEST_CASE("no allocation: learned SDF batched inference after construction", "[a
   for (int rep = 0; rep < 3; ++rep) batch.evaluate(p.data(), pose.data(), false, n, d.data(), g.data());
   const long allocs = g_allocs.load() - before;
   CHECK(allocs == 0);
+#endif
+}
+
+// PPO's training step: the learner's sampled act over N envs, the env step
+// and observe(), whose last call of a rollout runs the update (value pass,
+// GAE, minibatch epochs with both tapes and Adam). Two rollouts warm up the
+// tapes' arenas (the minibatches come in two sizes).
+TEST_CASE("no allocation: PPO act, observe and update after warm-up", "[alloc]") {
+#if !ATACOM_COUNT_ALLOCS
+  SUCCEED("allocation counting disabled under AddressSanitizer");
+#else
+  const int N = 300;
+  PpoConfig c = default_ppo_config();
+  c.rollout_steps = 4;
+  c.epochs = 2;
+  c.minibatch_size = 170;  // 1200 rows: 7 minibatches of 171 and 172 rows
+  c.value_clip_range = 0.5;
+  for (const auto mode : {LogStdMode::StateIndependent, LogStdMode::StateDependent}) {
+    c.log_std = mode;
+    auto env = make_env(EnvRequest{"table", N, SafetyLayer::Atacom});
+    env->seed(1);
+    const LearnerContext ctx{&env->spec(), N, 1, &env->buffers()};
+    PpoLearner learner(ctx, c);
+    std::vector<Rng> rngs;
+    for (int i = 0; i < N; ++i) rngs.emplace_back(1, uint64_t(i));
+    std::vector<float> obs = env->buffers().obs;
+    std::vector<double> act(size_t(N) * 7);
+    auto step = [&]() {
+      learner.policy().act(obs.data(), N, false, rngs.data(), act.data());
+      env->step(act.data());
+      learner.observe(obs.data(), act.data(), env->buffers());
+      std::copy(env->buffers().obs.begin(), env->buffers().obs.end(), obs.begin());
+    };
+    for (int k = 0; k < 2 * c.rollout_steps; ++k) step();
+    const long before = g_allocs.load();
+    for (int k = 0; k < 2 * c.rollout_steps; ++k) step();
+    const long allocs = g_allocs.load() - before;
+    REQUIRE(learner.updates() == 4 * 2 * 7);
+    CHECK(allocs == 0);
+  }
 #endif
 }

@@ -76,7 +76,9 @@ json small_run(int64_t steps) {
 TEST_CASE("ppo: config defaults, JSON round trip and strict ranges", "[ppo]") {
   const PpoConfig d = atacom::default_ppo_config();
   REQUIRE(d.actor.hidden == std::vector<int>{64, 64});
-  REQUIRE(d.actor.activation == atacom::Activation::Tanh);
+  REQUIRE(d.actor.activation == atacom::Activation::Relu);
+  REQUIRE(d.rollout_steps == 16);
+  REQUIRE(d.minibatch_size == 512);
   REQUIRE(d.clip_range == 0.2);
   REQUIRE(d.gae_lambda == 0.95);
   REQUIRE(!d.target_kl.has_value());
@@ -104,6 +106,11 @@ TEST_CASE("ppo: config defaults, JSON round trip and strict ranges", "[ppo]") {
   REQUIRE_THROWS_WITH((json{{"lr_schedule", "cosine"}}.get<PpoConfig>()), Catch::Contains("linear"));
   REQUIRE_THROWS_WITH((json{{"init_log_std", 3.0}}.get<PpoConfig>()), Catch::Contains("init_log_std"));
   REQUIRE_THROWS_WITH((json{{"actor", {{"hidden", {0}}}}}.get<PpoConfig>()), Catch::Contains("ppo.actor.hidden"));
+  REQUIRE_THROWS_WITH((json{{"critic", {{"width", 3}}}}.get<PpoConfig>()), Catch::Contains("ppo.critic.width"));
+  // a network's keys lay over PPO's default network
+  const PpoConfig tanh = json{{"actor", {{"activation", "tanh"}}}}.get<PpoConfig>();
+  REQUIRE(tanh.actor.hidden == std::vector<int>{64, 64});
+  REQUIRE(tanh.actor.activation == atacom::Activation::Tanh);
   // linear schedule: the factor falls to 0 at lr_decay_steps and stays there
   c.lr_decay_steps = 1000;
   REQUIRE(atacom::ppo_lr_factor(c, 0) == 1.0);

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_invoke.h>
@@ -34,23 +35,23 @@ nlohmann::json opt(const std::optional<double>& v) { return v ? nlohmann::json(*
 PpoConfig default_ppo_config() {
   PpoConfig c;
   c.actor.hidden = c.critic.hidden = {64, 64};
-  c.actor.activation = c.critic.activation = Activation::Tanh;
-  c.rollout_steps = 32;
+  c.actor.activation = c.critic.activation = Activation::Relu;
+  c.rollout_steps = 16;
   c.epochs = 10;
-  c.minibatch_size = 4096;
+  c.minibatch_size = 512;
   c.gamma = 0.99;
   c.gae_lambda = 0.95;
   c.clip_range = 0.2;
   c.value_clip_range = std::nullopt;
   c.entropy_coef = 0.0;
-  c.lr_actor = c.lr_critic = 3e-4;
+  c.lr_actor = c.lr_critic = 1e-3;
   c.lr_schedule = LrSchedule::Constant;
   c.lr_decay_steps = 10'000'000;
   c.target_kl = std::nullopt;
   c.normalize_advantages = true;
   c.obs_norm = true;
   c.log_std = LogStdMode::StateIndependent;
-  c.init_log_std = 0.0;
+  c.init_log_std = -0.5;
   c.log_std_min = -5.0;
   c.log_std_max = 2.0;
   c.max_grad_norm = 0.5;
@@ -99,8 +100,15 @@ E read_choice(ConfigReader& r, const char* key, E current, const char* (*name)(E
 void from_json(const nlohmann::json& j, PpoConfig& c) {
   ConfigReader r(j, "ppo");
   c = default_ppo_config();
-  if (const auto* s = r.sub("actor")) c.actor = read_mlp_config(*s, r.path("actor"));
-  if (const auto* s = r.sub("critic")) c.critic = read_mlp_config(*s, r.path("critic"));
+  // A network's keys lay over PPO's default network (not the Mlp default).
+  for (auto [key, net] : {std::pair{"actor", &c.actor}, std::pair{"critic", &c.critic}}) {
+    const nlohmann::json* s = r.sub(key);
+    if (!s) continue;
+    if (!s->is_object()) throw std::invalid_argument("config section '" + r.path(key) + "' must be a JSON object");
+    nlohmann::json merged = *net;
+    for (auto it = s->begin(); it != s->end(); ++it) merged[it.key()] = it.value();
+    *net = read_mlp_config(merged, r.path(key));
+  }
   r.get("rollout_steps", c.rollout_steps, range::closed(1, kMaxRolloutSteps));
   r.get("epochs", c.epochs, range::closed(1, kMaxEpochs));
   r.get("minibatch_size", c.minibatch_size, range::closed(1, limits::kMaxBatchSize));

@@ -44,23 +44,23 @@ enum class LrSchedule : uint8_t { Constant = 0, Linear = 1 };
 struct PpoConfig {
   MlpConfig actor;                       // actor trunk
   MlpConfig critic;                      // value network
-  int rollout_steps = 32;                // T: batch steps per rollout (N*T samples per update)
+  int rollout_steps = 16;                // T: batch steps per rollout (N*T samples per update)
   int epochs = 10;                       // passes over the rollout per update
-  int minibatch_size = 4096;             // samples per gradient step (the rollout is cut into round(N*T / this))
+  int minibatch_size = 512;              // samples per gradient step (the rollout is cut into round(N*T / this))
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double clip_range = 0.2;               // of the probability ratio
   std::optional<double> value_clip_range;  // nullopt: unclipped value loss
   double entropy_coef = 0.0;
-  double lr_actor = 3e-4;
-  double lr_critic = 3e-4;
+  double lr_actor = 1e-3;
+  double lr_critic = 1e-3;
   LrSchedule lr_schedule = LrSchedule::Constant;
   int64_t lr_decay_steps = 10'000'000;   // linear: the rates fall to 0 at this many env steps
   std::optional<double> target_kl;       // nullopt: no early stop
   bool normalize_advantages = true;
   bool obs_norm = true;                  // running mean/std normalisation (train/running_obs_norm.hpp)
   LogStdMode log_std = LogStdMode::StateIndependent;
-  double init_log_std = 0.0;
+  double init_log_std = -0.5;
   double log_std_min = -5.0;             // the log-std is clamped to [min, max] in both modes
   double log_std_max = 2.0;
   double max_grad_norm = 0.5;            // per network (actor with its log-std, critic); 0: off
@@ -68,9 +68,11 @@ struct PpoConfig {
   double init_output_scale = 0.01;       // the actor's output layer starts this much smaller
   AdamConfig adam;
 };
-// The one default factory (64-64 tanh networks, T 32, 10 epochs, minibatch
-// 4096, gamma 0.99, lambda 0.95, clip 0.2, lr 3e-4, state-independent
-// log-std 0, gradient norm 0.5, running observation normalisation).
+// The one default factory (64-64 ReLU networks, T 16, 10 epochs, minibatches
+// of 512, gamma 0.99, lambda 0.95, clip 0.2, lr 1e-3, state-independent
+// log-std -0.5, gradient norm 0.5, running observation normalisation): the
+// table run's first tuning pass (docs/training.md, "PPO"), meant for about
+// 128 envs (train.num_envs).
 PpoConfig default_ppo_config();
 void to_json(nlohmann::json& j, const PpoConfig& c);
 void from_json(const nlohmann::json& j, PpoConfig& c);  // unknown keys and bad values rejected

@@ -268,8 +268,16 @@ uint64_t PpoLearner::state_hash() const {
 // safety layer (docs/training.md, "PPO", has the measurements behind them).
 nlohmann::json ppo_default_config(const std::string& env, SafetyLayer safety) {
   nlohmann::json c = default_ppo_config();
-  (void)env;
+  // table, shelf, hri, nav (measured through ATACOM with --envs 128; the
+  // same settings stand for the other layers until they are measured):
+  // gamma 0.98, 5 epochs of minibatches of 256. Table: 10 of 10 seeds at
+  // 0.05 m, median 120k env steps (100k-240k), 0 training collisions.
   (void)safety;
+  if (env == "table" || env == "shelf" || env == "hri" || env == "nav") {
+    c["gamma"] = 0.98;
+    c["epochs"] = 5;
+    c["minibatch_size"] = 256;
+  }
   return c;
 }
 
