@@ -359,7 +359,8 @@ TEST_CASE("ppo: actions are clip(u), the rollout keeps the pre-clip sample u and
     other[3] = other[3] > 0 ? other[3] - 0.5 : other[3] + 0.5;
     b.learner->policy().act(b.obs.data(), N, false, b.rngs.data(), b.actions.data());
     b.env->step(b.actions.data());
-    REQUIRE_THROWS_WITH(learner.observe(b.obs.data(), other.data(), b.env->buffers()), Catch::Contains("did not sample"));
+    REQUIRE_THROWS_WITH(learner.observe(b.obs.data(), other.data(), b.env->buffers()),
+                        Catch::Contains("did not sample"));
   }
 }
 
@@ -479,7 +480,8 @@ TEST_CASE("ppo: a policy file acts exactly as the learner's policy", "[ppo]") {
   const auto s = train(cfg, dir);
   const auto policy = atacom::TrainedPolicy::load(dir);
   const atacom::RunConfig rc = atacom::resolve_run_config(cfg);
-  auto eval_env = atacom::make_env(atacom::EnvRequest{"pendulum", rc.train.eval_episodes, atacom::SafetyLayer::None, rc.env});
+  auto eval_env =
+      atacom::make_env(atacom::EnvRequest{"pendulum", rc.train.eval_episodes, atacom::SafetyLayer::None, rc.env});
   const atacom::EvalResult ev = atacom::evaluate(*eval_env, *policy, rc.train.eval_episodes, uint64_t(rc.train.seed),
                                                  rc.train.eval_deterministic);
   REQUIRE(ev.return_mean == s.final_eval.return_mean);

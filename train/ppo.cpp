@@ -26,7 +26,9 @@ constexpr int kMaxEpochs = 1000;
 constexpr int kValueChunk = 4096;  // rows per value pass (fixed: the same bits for any rollout size)
 constexpr auto kKeepGrads = Adam<float>::Grads::Keep;
 
-const char* log_std_name(LogStdMode m) { return m == LogStdMode::StateDependent ? "state_dependent" : "state_independent"; }
+const char* log_std_name(LogStdMode m) {
+  return m == LogStdMode::StateDependent ? "state_dependent" : "state_independent";
+}
 const char* schedule_name(LrSchedule s) { return s == LrSchedule::Linear ? "linear" : "constant"; }
 nlohmann::json opt(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 }  // namespace
@@ -66,7 +68,8 @@ void to_json(nlohmann::json& j, const PpoConfig& c) {
                      {"epochs", c.epochs}, {"minibatch_size", c.minibatch_size}, {"gamma", c.gamma},
                      {"gae_lambda", c.gae_lambda}, {"clip_range", c.clip_range},
                      {"value_clip_range", opt(c.value_clip_range)}, {"entropy_coef", c.entropy_coef},
-                     {"lr_actor", c.lr_actor}, {"lr_critic", c.lr_critic}, {"lr_schedule", schedule_name(c.lr_schedule)},
+                     {"lr_actor", c.lr_actor}, {"lr_critic", c.lr_critic},
+                     {"lr_schedule", schedule_name(c.lr_schedule)},
                      {"lr_decay_steps", c.lr_decay_steps}, {"target_kl", opt(c.target_kl)},
                      {"normalize_advantages", c.normalize_advantages}, {"obs_norm", c.obs_norm},
                      {"log_std", log_std_name(c.log_std)}, {"init_log_std", c.init_log_std},
@@ -93,7 +96,8 @@ E read_choice(ConfigReader& r, const char* key, E current, const char* (*name)(E
     if (s == name(e)) return e;
     known += (known.empty() ? "" : ", ") + std::string(name(e));
   }
-  throw std::invalid_argument("config key '" + r.path(key) + "' is '" + printable_text(s) + "', must be one of " + known);
+  throw std::invalid_argument("config key '" + r.path(key) + "' is '" + printable_text(s) + "', must be one of " +
+                              known);
 }
 }  // namespace
 
@@ -119,12 +123,14 @@ void from_json(const nlohmann::json& j, PpoConfig& c) {
   r.get("entropy_coef", c.entropy_coef, range::closed(0.0, 1e3));
   r.get("lr_actor", c.lr_actor, range::closed(0.0, 1.0));
   r.get("lr_critic", c.lr_critic, range::closed(0.0, 1.0));
-  c.lr_schedule = read_choice(r, "lr_schedule", c.lr_schedule, schedule_name, {LrSchedule::Constant, LrSchedule::Linear});
+  c.lr_schedule =
+      read_choice(r, "lr_schedule", c.lr_schedule, schedule_name, {LrSchedule::Constant, LrSchedule::Linear});
   r.get("lr_decay_steps", c.lr_decay_steps, range::closed<int64_t>(1, limits::kMaxSteps));
   read_optional(r, "target_kl", c.target_kl, range::positive());
   r.get("normalize_advantages", c.normalize_advantages);
   r.get("obs_norm", c.obs_norm);
-  c.log_std = read_choice(r, "log_std", c.log_std, log_std_name, {LogStdMode::StateIndependent, LogStdMode::StateDependent});
+  c.log_std =
+      read_choice(r, "log_std", c.log_std, log_std_name, {LogStdMode::StateIndependent, LogStdMode::StateDependent});
   r.get("init_log_std", c.init_log_std, range::closed(-20.0, 20.0));
   r.get("log_std_min", c.log_std_min, range::closed(-20.0, 20.0));
   r.get("log_std_max", c.log_std_max, range::closed(-20.0, 20.0));
@@ -398,7 +404,8 @@ PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic) {
   if (const int n = total.minibatch_steps) {
     total.policy_loss /= n, total.value_loss /= n, total.entropy /= n, total.approx_kl /= n, total.clip_fraction /= n;
   } else {
-    total.policy_loss = total.value_loss = total.entropy = total.clip_fraction = std::numeric_limits<double>::quiet_NaN();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    total.policy_loss = total.value_loss = total.entropy = total.clip_fraction = nan;
   }
   return total;
 }

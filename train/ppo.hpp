@@ -160,7 +160,9 @@ class Ppo {
   void save(std::ostream& out) const;
   void load(std::istream& in);  // throws on shape mismatch, truncation, non-finite values
 
-  size_t allocations() const { return actor_tape_.allocations() + critic_tape_.allocations() + value_tape_.allocations(); }
+  size_t allocations() const {
+    return actor_tape_.allocations() + critic_tape_.allocations() + value_tape_.allocations();
+  }
   double gemm_flops() const { return actor_tape_.gemm_flops() + critic_tape_.gemm_flops() + value_tape_.gemm_flops(); }
 
  private:

@@ -52,7 +52,8 @@ PpoPolicy::PpoPolicy(const EnvSpec& spec, const PpoConfig& c)
 }
 
 void PpoPolicy::act(const float* obs, int N, bool deterministic, Rng* rngs, double* actions) {
-  if (!deterministic && rngs == nullptr) throw std::invalid_argument("PPO policy: sampled actions need per-env streams");
+  if (!deterministic && rngs == nullptr)
+    throw std::invalid_argument("PPO policy: sampled actions need per-env streams");
   const size_t D = size_t(obs_dim()), A = size_t(act_dim_);
   if (nobs_.size() < size_t(N) * D) nobs_.resize(size_t(N) * D);
   norm_->apply(obs, nobs_.data(), N);
@@ -77,7 +78,8 @@ void PpoPolicy::save(std::ostream& out) const {
   norm_->save(out);
   bin::write_vec(out, actor_->params());
   // The state-independent log-std (A); none when the actor outputs it.
-  const AlignedVector<float> ls = log_std_ ? AlignedVector<float>(log_std_, log_std_ + act_dim_) : AlignedVector<float>();
+  const AlignedVector<float> ls =
+      log_std_ ? AlignedVector<float>(log_std_, log_std_ + act_dim_) : AlignedVector<float>();
   bin::write_vec(out, ls);
 }
 
@@ -93,7 +95,8 @@ void PpoPolicy::load(std::istream& in) {
   if ((dep != 0) != dependent_) throw std::runtime_error("PPO policy: its log-std mode differs from the run's config");
   const double lo = bin::read_pod<double>(in, "ppo_policy.log_std_min");
   const double hi = bin::read_pod<double>(in, "ppo_policy.log_std_max");
-  if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi)) throw std::runtime_error("PPO policy has invalid log-std bounds");
+  if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi))
+    throw std::runtime_error("PPO policy has invalid log-std bounds");
   own_norm_.load(in);
   bin::read_vec(in, own_actor_->params(), "ppo_policy.actor", int64_t(own_actor_->params().size()));
   bin::read_vec(in, own_log_std_, "ppo_policy.log_std", dependent_ ? 0 : act_dim_);
