@@ -357,7 +357,7 @@ PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic) {
     }
     total.explained_variance = vr > 0 ? 1.0 - ve / vr : std::numeric_limits<double>::quiet_NaN();
   }
-  const int K = int(std::max<int64_t>(1, (S + cfg_.minibatch_size / 2) / cfg_.minibatch_size));
+  const int K = int(ppo_minibatches(S, cfg_.minibatch_size));
   const int max_b = int((S + K - 1) / K);
   if (mb_obs_.size() < size_t(max_b) * obs_dim_) {  // first update: sized once
     mb_obs_.assign(size_t(max_b) * obs_dim_, 0.0f);

@@ -79,6 +79,13 @@ void from_json(const nlohmann::json& j, PpoConfig& c);  // unknown keys and bad 
 
 // Learning rate factor at `env_steps` under the config's schedule.
 double ppo_lr_factor(const PpoConfig& c, int64_t env_steps);
+// Minibatches per epoch of a rollout of S samples: S / minibatch_size
+// rounded to the nearest integer, at least 1 (Ppo::update cuts the rollout
+// into that many nearly equal parts).
+inline int64_t ppo_minibatches(int64_t S, int minibatch_size) {
+  const int64_t k = (S + minibatch_size / 2) / minibatch_size;
+  return k > 0 ? k : 1;
+}
 
 // What the actor's act writes besides the actions (the learner's rollout).
 struct PpoSample {

@@ -18,8 +18,6 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-// Minibatches per epoch for S samples (Ppo::update's cut).
-int64_t minibatches(int64_t S, int size) { return std::max<int64_t>(1, (S + size / 2) / size); }
 }  // namespace
 
 // ---------------------------------------------------------------- policy
@@ -235,7 +233,7 @@ void PpoLearner::load(std::istream& in, int64_t env_steps) {
   if (rollouts != batch_steps / T)
     bad(std::to_string(rollouts) + " rollouts after " + std::to_string(batch_steps) + " batch steps of T = " +
         std::to_string(T));
-  const int64_t most = rollouts * cfg_.epochs * minibatches(T * N_, cfg_.minibatch_size);
+  const int64_t most = rollouts * cfg_.epochs * ppo_minibatches(T * N_, cfg_.minibatch_size);
   if (updates < 0 || updates > most)
     bad(std::to_string(updates) + " gradient steps after " + std::to_string(rollouts) + " rollouts (at most " +
         std::to_string(most) + ")");
