@@ -361,7 +361,7 @@ int main(int argc, char** argv) {
   if (want("ppo_update"))
     for (int threads : thread_list) {
       const double peak = bench_fma_peak(threads, false);
-      // The shipped setting (ppo_default_config and --envs 128: 64-64 ReLU, T 16,
+      // PPO's defaults on 128 envs (the preset cells' N: 64-64 ReLU, T 16,
       // minibatches of 512), the same at 256-256, and large rollouts and
       // minibatches (1024 envs x T 32, 4096) with ReLU and tanh.
       struct Case { int N, T; std::vector<int> hidden; Activation act; int minibatch; };
