@@ -15,6 +15,7 @@
 #include "kernels/redsdf_batch.hpp"
 #include "atacom/rng.hpp"
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "train/ppo_learner.hpp"
 #include "build_kind.hpp"
 
