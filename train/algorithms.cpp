@@ -10,6 +10,7 @@ const std::vector<ActionSourceEntry>& action_sources() {
   using A = ActionSource;
   static const std::vector<ActionSourceEntry> table = {
       {"sac", A::Learner, "sac", true, "SAC (trains)"},
+      {"ppo", A::Learner, "ppo", true, "PPO (trains)"},
       {"la", A::Attractor, "", false, "the env's linear attractor (evaluated only)"},
       {"random", A::Random, "", false, "uniform random actions (evaluated only)"},
       {"zero", A::Zero, "", false, "zero actions (evaluated only)"},

@@ -5,6 +5,7 @@
 
 #include "atacom/learner.hpp"
 #include "train/adversary.hpp"
+#include "train/ppo_learner.hpp"
 #include "train/sac_learner.hpp"
 #include "src/core/config_json.hpp"
 
@@ -16,6 +17,8 @@ const std::vector<LearnerEntry>& learner_entries() {
        make_sac_learner, make_sac_policy},
       {"adversary", "adversary", "SAC maximising the constraint values (train/adversary.hpp)",
        adversary_default_config_json, adversary_resolve_config, make_adversary_learner, make_adversary_policy},
+      {"ppo", "ppo", "PPO with a clipped surrogate and GAE (train/ppo.hpp)", ppo_default_config_json,
+       ppo_resolve_config, make_ppo_learner, make_ppo_policy},
   };
   return entries;
 }
