@@ -15,6 +15,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <CLI/CLI.hpp>
+
+#include "src/cli/flag_checks.hpp"
 #include "src/core/value_range.hpp"
 
 namespace atacom::bench {
@@ -29,6 +32,19 @@ T flag_value(const char* flag, const std::string& text, const Range<T>& r) {
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "%s\n", e.what());
     std::exit(2);
+  }
+}
+
+// argv through CLI11, as every `atacom` subcommand reads it (numbers through
+// cli::add_number_flag): --help prints and exits 0, a usage error exits 2.
+// Returns true when the bench should run.
+inline bool parse_args(CLI::App& app, int argc, char** argv, int& exit_code) {
+  try {
+    app.parse(argc, argv);
+    return true;
+  } catch (const CLI::ParseError& e) {
+    exit_code = app.exit(e) == 0 ? 0 : 2;
+    return false;
   }
 }
 

@@ -34,8 +34,12 @@ double thread_cpu_s() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"bench_human: the human's capsule rows against the arm, per env and second"};
+  int N_only = 0;
+  cli::add_number_flag(app, "N", N_only, range::closed(1, limits::kMaxEnvs), "one env count (default: 256 and 4096)");
+  if (int code = 0; !bench::parse_args(app, argc, argv, code)) return code;
   std::vector<int> Ns = {256, 4096};
-  if (argc > 1) Ns = {bench::flag_value<int>("N", argv[1], range::closed(1, limits::kMaxEnvs))};
+  if (N_only) Ns = {N_only};
   const HumanModel m = load_human_model();
   const HumanMotionLibrary lib = load_default_human_motion();
   const HumanReplayConfig replay;

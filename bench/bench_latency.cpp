@@ -177,19 +177,11 @@ std::vector<double> time_filter(const std::string& exe, int n, int m, int k, int
 int main(int argc, char** argv) {
   int calls = 100000, filter_calls = 5000;
   std::string exe;
-  for (int i = 1; i < argc; ++i) {
-    const bool has_value = i + 1 < argc;
-    if (!std::strcmp(argv[i], "--calls") && has_value) {
-      calls = bench::flag_value<int>("--calls", argv[++i], range::closed(1, 100'000'000));
-    } else if (!std::strcmp(argv[i], "--filter-calls") && has_value) {
-      filter_calls = bench::flag_value<int>("--filter-calls", argv[++i], range::closed(0, 10'000'000));
-    } else if (!std::strcmp(argv[i], "--atacom") && has_value) {
-      exe = argv[++i];
-    } else {
-      std::fprintf(stderr, "usage: bench_latency [--calls C] [--filter-calls F] [--atacom PATH]\n");
-      return 2;
-    }
-  }
+  CLI::App app{"bench_latency: one projector call in process and through `atacom filter`"};
+  cli::add_number_flag(app, "--calls", calls, range::closed(1, 100'000'000), "in-process calls");
+  cli::add_number_flag(app, "--filter-calls", filter_calls, range::closed(0, 10'000'000), "calls through the filter (0: skip)");
+  app.add_option("--atacom", exe, "the atacom executable (default: ../atacom beside this bench)");
+  if (int code = 0; !bench::parse_args(app, argc, argv, code)) return code;
   if (exe.empty()) {
     std::error_code ec;
     exe = (std::filesystem::read_symlink("/proc/self/exe", ec).parent_path().parent_path() / "atacom").string();

@@ -83,10 +83,20 @@ int bound_pairs(int rounds, const char* only = nullptr, int calls = 0) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc > 2 && std::strcmp(argv[1], "--bound-pairs") == 0) return bound_pairs(std::max(1, std::atoi(argv[2])));
-  if (argc > 3 && std::strcmp(argv[1], "--bound-calls") == 0)
-    return bound_pairs(1, argv[2], std::max(0, std::atoi(argv[3])));
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  CLI::App app{"bench_projector: projections per second over N, k, m and threads"};
+  bool quick = false;
+  int pairs = 0;
+  std::vector<std::string> bound_calls;
+  app.add_flag("--quick", quick, "fewer, shorter timing rounds");
+  cli::add_number_flag(app, "--bound-pairs", pairs, range::closed(1, 1'000'000),
+                       "only the bound rules, this many alternating A/B pairs");
+  app.add_option("--bound-calls", bound_calls, "RULE CALLS: only one bound rule, this many calls (for perf)")
+      ->expected(2);
+  if (int code = 0; !bench::parse_args(app, argc, argv, code)) return code;
+  if (pairs > 0) return bound_pairs(pairs);
+  if (!bound_calls.empty())
+    return bound_pairs(1, bound_calls[0].c_str(),
+                       bench::flag_value<int>("--bound-calls", bound_calls[1], range::closed(0, 1'000'000'000)));
   const std::string cpu = bench::cpu_name();
   set_num_threads(1);
   const double peak1 = bench::measure_f64_peak_gflops_one_core();

@@ -323,32 +323,19 @@ int main(int argc, char** argv) {
   // --only, --batch and --threads narrow the grid (profiling one case).
   std::string only;
   int batch_only = 0, threads_only = 0;
-  auto usage = []() {
-    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|ppo_update|actor_act|adam_step|gemm_peak|gemm_tile|fma_peak]\n"
-                         "                 [--batch B] [--threads T] [--repeats R] [--window SECONDS]\n");
-    return 2;
-  };
-  for (int i = 1; i < argc; ++i) {
-    const bool has_value = i + 1 < argc;
-    if (!std::strcmp(argv[i], "--quick")) {
-      repeats = 2;
-      window_s = 0.3;
-    } else if (!std::strcmp(argv[i], "--only") && has_value) {
-      only = argv[++i];
-      if (only != "sac_update" && only != "ppo_update" && only != "actor_act" && only != "adam_step" && only != "gemm_peak" &&
-          only != "gemm_tile" && only != "fma_peak")
-        return usage();
-    } else if (!std::strcmp(argv[i], "--batch") && has_value) {
-      batch_only = bench::flag_value<int>("--batch", argv[++i], range::closed(1, 65536));
-    } else if (!std::strcmp(argv[i], "--threads") && has_value) {
-      threads_only = bench::flag_value<int>("--threads", argv[++i], range::closed(1, 256));
-    } else if (!std::strcmp(argv[i], "--repeats") && has_value) {
-      repeats = bench::flag_value<int>("--repeats", argv[++i], range::closed(1, 10000));
-    } else if (!std::strcmp(argv[i], "--window") && has_value) {
-      window_s = bench::flag_value<double>("--window", argv[++i], range::open_closed(0.0, 600.0));
-    } else {
-      return usage();
-    }
+  CLI::App app{"bench_sac: learner updates, inference, Adam and GEMM kernels per second"};
+  bool quick = false;
+  app.add_flag("--quick", quick, "2 repeats of 0.3 s windows");
+  app.add_option("--only", only, "one bench line")
+      ->check(CLI::IsMember({"sac_update", "ppo_update", "actor_act", "adam_step", "gemm_peak", "gemm_tile", "fma_peak"}));
+  cli::add_number_flag(app, "--batch", batch_only, range::closed(1, 65536), "one batch size (default: 64 and 256)");
+  cli::add_number_flag(app, "--threads", threads_only, range::closed(1, 256), "one thread count (default: 1 and 2)");
+  cli::add_number_flag(app, "--repeats", repeats, range::closed(1, 10000), "timing windows (the best is kept)");
+  cli::add_number_flag(app, "--window", window_s, range::open_closed(0.0, 600.0), "seconds per timing window");
+  if (int code = 0; !bench::parse_args(app, argc, argv, code)) return code;
+  if (quick) {
+    repeats = 2;
+    window_s = 0.3;
   }
   std::vector<int> thread_list = {1, 2};
   if (threads_only) thread_list = {threads_only};

@@ -102,20 +102,10 @@ void run(Case& c, bool quick) {
 int main(int argc, char** argv) {
   bool quick = false;
   std::string only;  // one input family, or all
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--quick") == 0) {
-      quick = true;
-    } else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
-      only = argv[++i];
-      if (only != "random" && only != "table" && only != "nav") {
-        std::fprintf(stderr, "bench_safety_layers: --only takes random, table or nav, not '%s'\n", only.c_str());
-        return 2;
-      }
-    } else {
-      std::fprintf(stderr, "usage: bench_safety_layers [--quick] [--only random|table|nav]\n");
-      return 2;
-    }
-  }
+  CLI::App app{"bench_safety_layers: ATACOM, SafeLayer and the other layers per env and second"};
+  app.add_flag("--quick", quick, "shorter timing rounds");
+  app.add_option("--only", only, "one input family")->check(CLI::IsMember({"random", "table", "nav"}));
+  if (int code = 0; !bench::parse_args(app, argc, argv, code)) return code;
   auto wanted = [&](const char* inputs) { return only.empty() || only == inputs; };
   if (wanted("random")) {
     Case c = random_case(7, 7, 34, 1);

@@ -113,14 +113,13 @@ void bench_learned(const std::string& object, const std::string& weights, const 
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) {
-      repeats = 2;
-      window_s = 0.1;
-    } else {
-      std::fprintf(stderr, "usage: bench_sdf [--quick]\n");
-      return 2;
-    }
+  CLI::App app{"bench_sdf: analytic and learned distance fields, points per second"};
+  bool quick = false;
+  app.add_flag("--quick", quick, "2 repeats of 0.1 s windows");
+  if (int code = 0; !bench::parse_args(app, argc, argv, code)) return code;
+  if (quick) {
+    repeats = 2;
+    window_s = 0.1;
   }
   const int N = 4096, poi = 9;
   const int64_t n = int64_t(N) * poi;
