@@ -115,7 +115,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
     if (!*csv) throw std::runtime_error("viability: cannot write '" + cfg.csv + "'");
     *csv << "round,env,row,row_name,tolerance,class,c_prev,c_post,c_lin,c_nonlinear,slack,slack_rate,"
             "lambda,bias_out,b_max,t_max,a_max,saturated_joint,jg_norm,dc_correction,dc_tangent,rows_near,"
-            "keep_exists,keep_lambda_max,drift_rate,escape_rate,c_prev1,c_prev2,c_prev3,lambda_prev1,bias_prev1,obs\n";
+            "keep_exists,keep_lambda_max,drift_rate,escape_rate,c_prev1,c_prev2,c_prev3,lambda_prev1,bias_prev1,alpha,obs\n";
   }
   long records = 0;
 
@@ -131,6 +131,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
   std::map<std::string, long> classes;
   long episodes = 0, terminations = 0, violations = 0, bias_steps = 0;
   double max_c = -INFINITY, max_nonlinear = 0.0, max_drift = 0.0;
+  std::vector<double> row_max(size_t(k), -INFINITY);  // largest value each row reached
   long drift_over_escape = 0;
   const bool moving = pm.has_drift || pm.p > 0;
   const long rounds = (rc.steps + N - 1) / N;
@@ -189,6 +190,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
         const double c = b.constraints[size_t(i) * k + row];
         if (!std::isfinite(c)) continue;
         max_c = std::max(max_c, c);
+        row_max[size_t(row)] = std::max(row_max[size_t(row)], c);
         const double excess = c - spec.constraint_tolerance[row];
         if (excess > 0.0 && (worst < 0 || excess > worst_excess)) {
           worst = row;
@@ -279,7 +281,13 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
                         spec.dt * pb.lambda[i] * JG.row(row).dot(tvec), near, keep_exists ? 1 : 0, keep_lambda, F(row), JG.row(row).cwiseAbs().sum(), prev(1),
                         prev(2), prev(3), have1 ? hist.lambda[s1] : NAN, have1 ? int(hist.bias[s1]) : -1);
           *csv << line;
-          // The pre-step observation, ';'-separated (round-trip precision).
+          // The policy's action, then the pre-step observation, ';'-separated
+          // (round-trip precision): enough to replay the step (tests/test_viability.cpp).
+          for (int j = 0; j < m; ++j) {
+            std::snprintf(line, sizeof line, "%s%.17g", j ? ";" : "", pb.alpha[size_t(i) * m + j]);
+            *csv << line;
+          }
+          *csv << ',';
           for (int d = 0; d < od; ++d) {
             std::snprintf(line, sizeof line, "%s%.9g", d ? ";" : "", double(obs_prev[size_t(i) * od + d]));
             *csv << line;
@@ -308,6 +316,12 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
     coll[spec.info_names[collision_cols[c]] + "s"] = static_cast<long>(std::llround(collision_sums[c]));
   nlohmann::json cls = nlohmann::json::object();
   for (const auto& [name, count] : classes) cls[name] = count;
+  // Per row: the largest value reached and its tolerance (the env's sizing
+  // rule for tolerances reads these, docs/envs_arm.md).
+  nlohmann::json rows = nlohmann::json::object();
+  for (int row = 0; row < k; ++row)
+    if (std::isfinite(row_max[size_t(row)]))
+      rows[spec.constraint_names[size_t(row)]] = {row_max[size_t(row)], spec.constraint_tolerance[size_t(row)]};
   nlohmann::json out = {{"env", src.env},
           {"policy", rc.policy},
           {"bounds", bound_rule_name(pm.bounds)},
@@ -321,6 +335,7 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
           {"max_constraint", k ? nlohmann::json(max_c) : nlohmann::json(nullptr)},
           {"max_nonlinear", max_nonlinear},
           {"classes", cls},
+          {"row_max", rows},
           {"max_drift_rate", max_drift},
           {"drift_over_escape_steps", drift_over_escape}};
   out.update(coll);
