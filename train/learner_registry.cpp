@@ -5,10 +5,16 @@
 
 #include "atacom/learner.hpp"
 #include "train/adversary.hpp"
+#include "train/sac_lag_learner.hpp"
 #include "train/sac_learner.hpp"
 #include "src/core/config_json.hpp"
 
 namespace atacom {
+
+namespace {
+// The section both Lagrangian learners read (train/lagrangian.hpp).
+LearnerSection lagrangian_section() { return {"lagrangian", lagrangian_default_config_json, lagrangian_resolve_config}; }
+}  // namespace
 
 const std::vector<LearnerEntry>& learner_entries() {
   static const std::vector<LearnerEntry> entries = {
@@ -16,6 +22,8 @@ const std::vector<LearnerEntry>& learner_entries() {
        make_sac_learner, make_sac_policy},
       {"adversary", "adversary", "SAC maximising the constraint values (train/adversary.hpp)",
        adversary_default_config_json, adversary_resolve_config, make_adversary_learner, make_adversary_policy},
+      {"sac-lag", "sac", "SAC-Lagrangian: a cost critic and a multiplier against the episode-cost budget (train/sac_lag_learner.hpp)",
+       sac_default_config_json, sac_resolve_config, make_sac_lag_learner, make_sac_policy, {lagrangian_section()}},
   };
   return entries;
 }

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -19,10 +20,10 @@ std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector
                                    "train_episode_return"};
   cols.insert(cols.end(), learner_columns.begin(), learner_columns.end());
   cols.insert(cols.end(), spec.info_names.begin(), spec.info_names.end());
-  for (const char* c : {"early_terminations", "avg_episode_steps", "violations", "eval_discounted_return_mean",
-                        "eval_discounted_return_std", "eval_max_constraint", "eval_episode_max_constraint",
-                        "train_episodes", "train_terminations",
-                        "train_violations"})
+  for (const char* c : {"early_terminations", "avg_episode_steps", "violations", "eval_cost_mean",
+                        "eval_discounted_return_mean", "eval_discounted_return_std", "eval_max_constraint",
+                        "eval_episode_max_constraint", "train_episodes", "train_terminations", "train_violations",
+                        "train_cost"})
     cols.push_back(c);
   for (size_t c = 0; c < spec.info_names.size() && c < spec.info_reduce.size(); ++c)
     if (spec.info_reduce[c] == InfoReduce::Sum) cols.push_back("train_" + spec.info_names[c]);
@@ -87,12 +88,30 @@ void ProgressFile::restore(int64_t rows) {
   if (!f) throw std::runtime_error("'" + path_ + "' is missing; the checkpoint expects " + std::to_string(rows) +
                                    " evaluation rows in it");
   std::string line;
-  if (!std::getline(f, line) || line != header_)
+  if (!std::getline(f, line))
     throw std::runtime_error("'" + path_ + "' does not start with this run's header (" + header_.substr(0, 60) + "...)");
+  // The file's columns in this run's order: at[c] = the file column of column c, -1 when the file has none.
+  std::vector<int> at(columns_.size(), -1);
+  const bool same_header = line == header_;
+  size_t file_cols = 0;
+  if (same_header) {
+    for (size_t c = 0; c < columns_.size(); ++c) at[c] = int(c);
+    file_cols = columns_.size();
+  } else {
+    std::istringstream hs(line);
+    for (std::string name; std::getline(hs, name, ','); ++file_cols) {
+      const int c = column(name);
+      if (c < 0 || at[size_t(c)] >= 0)
+        throw std::runtime_error("'" + path_ + "' does not start with this run's header (" + header_.substr(0, 60) +
+                                 "...): its column '" + name + "' is not one of this run's");
+      at[size_t(c)] = int(file_cols);
+    }
+  }
   lines_.clear();
   values_.clear();
   while (int64_t(lines_.size()) < rows && std::getline(f, line)) {
-    std::vector<double> v;
+    std::vector<double> cells;
+    std::vector<std::string> texts;
     std::istringstream ls(line);
     std::string cell;
     while (std::getline(ls, cell, ',')) {
@@ -101,13 +120,26 @@ void ProgressFile::restore(int64_t rows) {
       if (cell.empty() || end != cell.c_str() + cell.size())
         throw std::runtime_error("'" + path_ + "' row " + std::to_string(lines_.size() + 1) + " holds '" + cell +
                                  "', not a number");
-      v.push_back(x);
+      cells.push_back(x);
+      texts.push_back(cell);
     }
-    if (v.size() != columns_.size())
+    if (cells.size() != file_cols)
       throw std::runtime_error("'" + path_ + "' row " + std::to_string(lines_.size() + 1) + " has " +
-                               std::to_string(v.size()) + " values for " + std::to_string(columns_.size()) +
+                               std::to_string(cells.size()) + " values for " + std::to_string(file_cols) +
                                " columns");
-    lines_.push_back(line);
+    if (same_header) {
+      lines_.push_back(line);
+      values_.push_back(cells);
+      continue;
+    }
+    std::vector<double> v(columns_.size(), std::numeric_limits<double>::quiet_NaN());
+    std::string out;
+    for (size_t c = 0; c < columns_.size(); ++c) {
+      if (at[c] >= 0) v[c] = cells[size_t(at[c])];
+      if (c) out += ',';
+      out += at[c] >= 0 ? texts[size_t(at[c])] : std::string("nan");
+    }
+    lines_.push_back(out);
     values_.push_back(v);
   }
   if (int64_t(lines_.size()) < rows)
@@ -118,7 +150,8 @@ void ProgressFile::restore(int64_t rows) {
 
 // ---------------------------------------------------------------- progress.svg
 std::string learning_curve_svg(const std::string& title, const std::vector<double>& steps,
-                               const std::vector<double>& mean, const std::vector<double>& sd) {
+                               const std::vector<double>& mean, const std::vector<double>& sd,
+                               const std::string& color) {
   double x1 = 1, y0 = 0, y1 = 1;
   bool any = false;
   for (size_t i = 0; i < steps.size(); ++i) {
@@ -147,10 +180,10 @@ std::string learning_curve_svg(const std::string& title, const std::vector<doubl
     down.emplace_back(steps[i], mean[i] - s);
   }
   if (!line.empty()) {
-    svg.polyline(up, "#1f77b4", 1.0, 0.35);
-    svg.polyline(down, "#1f77b4", 1.0, 0.35);
-    svg.polyline(line, "#1f77b4", 2.0);
-    for (const auto& [x, y] : line) svg.circle(x, y, 0.006 * x1, "#1f77b4");  // one dot per evaluation
+    svg.polyline(up, color, 1.0, 0.35);
+    svg.polyline(down, color, 1.0, 0.35);
+    svg.polyline(line, color, 2.0);
+    for (const auto& [x, y] : line) svg.circle(x, y, 0.006 * x1, color);  // one dot per evaluation
   }
   return svg.str();
 }

@@ -123,7 +123,11 @@ std::string methods_text(const ReportData& d) {
          std::to_string(d.opts.curve_resamples) +
          " resamples per evaluation). P(improvement) of atacom-sac over a baseline: Mann-Whitney form, over all "
          "seed pairs 1 if atacom-sac is better, 1/2 if equal. Final-policy metrics are the last evaluation; "
-         "training metrics count over all training steps. A run is flagged when its final evaluation return is "
+         "training metrics count over all training steps. Cost: a step costs 1 when a constraint row exceeds its "
+         "stated tolerance or a collision / joint-limit event happens (Safety-Gymnasium's convention); eval_cost_mean "
+         "is the final policy's cost per episode, train_cost the cost summed over training; a cost axis is "
+         "log10(1 + cost) when its largest value is 100 or more. The training cost until a quality target is not "
+         "reported: no run records when it reached one. Colours are fixed per algorithm in every figure. A run is flagged when its final evaluation return is "
          "more than " + short_num(100 * d.opts.drop_return_frac) + "% of |best| below its best evaluation's, or its "
          "final distance more than " + short_num(d.opts.drop_distance) + " m above.";
 }
@@ -181,6 +185,8 @@ ReportResult write_report(const ReportOptions& opts) {
   for (const auto& env : d.envs) {
     figs.emplace_back("box_" + env + ".svg", boxplot_svg(d, env));
     figs.emplace_back("curves_" + env + ".svg", curves_svg(d, env));
+    figs.emplace_back("cost_return_" + env + ".svg", cost_return_svg(d, env));
+    figs.emplace_back("train_cost_" + env + ".svg", train_cost_svg(d, env));
   }
   for (const auto& [f, svg] : figs) write_file_atomic(out(f), svg);
 
@@ -196,10 +202,12 @@ ReportResult write_report(const ReportOptions& opts) {
        << "<h1>Sweep report</h1><p>" << html_escape(opts.dir) << ": " << res.finished << " of " << res.runs
        << " runs finished.</p><p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
   for (const auto& env : d.envs) {
-    md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n";
+    md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n"
+       << "![cost and return](cost_return_" << env << ".svg)\n\n![training cost](train_cost_" << env << ".svg)\n\n";
     html << "<h2>" << html_escape(env) << "</h2>\n";
     for (const auto& [f, svg] : figs)
-      if (f == "box_" + env + ".svg" || f == "curves_" + env + ".svg") html << "<div>" << svg << "</div>\n";
+      for (const char* kind : {"box_", "curves_", "cost_return_", "train_cost_"})
+        if (f == kind + env + ".svg") html << "<div>" << svg << "</div>\n";
     md << "| algo | metric | n | IQM [95% CI] | mean +- std | median [q1, q3] |\n|---|---|---|---|---|---|\n";
     html << "<table><tr><th>algo</th><th>metric</th><th>n</th><th>IQM [95% CI]</th><th>mean &plusmn; std</th>"
             "<th>median [q1, q3]</th></tr>\n";

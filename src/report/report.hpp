@@ -8,6 +8,9 @@
 //   summary.md            all of it as tables
 //   box_<env>.svg         one panel per metric, one box per algo, a point per seed
 //   curves_<env>.svg      eval return and final distance vs env steps: IQM over seeds, bootstrap band
+//   cost_return_<env>.svg final return vs the final policy's episode cost and vs the training cost:
+//                         a point per seed, an IQM diamond per algorithm
+//   train_cost_<env>.svg  cumulative training cost vs env steps: IQM over seeds, bootstrap band
 //   index.html            figures and tables in one page (inline SVG: opens from file://, no network)
 // Statistics: src/report/report_stats.hpp.
 #pragma once
