@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -35,22 +36,29 @@ std::string slurp(const std::string& p) {
   return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
 
+// progress.csv without its wall-clock columns (wall_s, time_to_target_s), empty cells kept.
 std::string without_wall(const std::string& csv) {
   std::istringstream in(csv);
   std::string line, out;
+  std::vector<std::string> head;
   while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string cell;
-    for (int k = 0; std::getline(ls, cell, ','); ++k)
-      if (k != 2) out += cell + ",";
+    std::vector<std::string> cells;
+    for (size_t at = 0;;) {
+      const size_t comma = line.find(',', at);
+      cells.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
+      if (comma == std::string::npos) break;
+      at = comma + 1;
+    }
+    if (head.empty()) head = cells;
+    for (size_t k = 0; k < cells.size(); ++k)
+      if (k >= head.size() || (head[k] != "wall_s" && head[k] != "time_to_target_s")) out += cells[k] + ",";
     out += "\n";
   }
   return out;
 }
 
 json summary_without_timing(json s) {
-  s.erase("wall_s");
-  s.erase("host");
+  for (const char* k : {"wall_s", "time_to_target_s", "eval_wall_s", "eval_share", "host"}) s.erase(k);
   return s;
 }
 

@@ -204,3 +204,80 @@ TEST_CASE("report: the numbers equal a direct computation from the run files", "
   REQUIRE(slurp(dir + "/report/summary.md").find("table-sac-seed5") != std::string::npos);
   fs::remove_all(dir);
 }
+
+TEST_CASE("report: time to target counts the runs that never reached it", "[report]") {
+  const std::string dir = (fs::temp_directory_path() / ("atacom_report_ttt_" + std::to_string(::getpid()))).string();
+  fs::remove_all(dir);
+  const SweepSpec spec = parse_sweep_spec(json::parse(R"({"envs": ["table"], "algos": ["sac", "atacom-sac"],
+                                                          "seeds": [0, 1, 2, 3, 4], "steps": 3000})"));
+  save_or_check_spec(dir, spec);
+  // sac reaches the target in 2 of 5 runs, atacom-sac in 4 of 5.
+  std::map<std::string, std::vector<double>> times;  // algo -> time_to_target_s, +inf when never
+  for (const SweepCell& c : sweep_cells(spec)) {
+    const fs::path run = fs::path(dir) / c.run_dir();
+    fs::create_directories(run);
+    const double s = double(c.seed);
+    const bool reached = c.algo == "sac" ? c.seed < 2 : c.seed != 3;
+    const double t = 100 + 37 * s + (c.algo == "sac" ? 50 : 0);
+    json sm = {{"env_steps", 3000}, {"final_distance", 0.1}, {"eval_return_mean", -10.0},
+               {"target", {{"distance", 0.05}, {"zero_info", json::array()}}},
+               {"time_to_target_s", reached ? json(t) : json(nullptr)},
+               {"steps_to_target", reached ? json(1000 * (c.seed + 1)) : json(nullptr)},
+               {"updates_to_target", reached ? json(900 * (c.seed + 1)) : json(nullptr)},
+               {"train_cost_to_target", reached ? json(0.0) : json(nullptr)}};
+    std::ofstream(run / "summary.json") << sm.dump(2);
+    std::ofstream(run / "progress.csv") << "env_steps,updates,wall_s,eval_return_mean,final_distance,time_to_target_s\n"
+                                        << "1000,0,0.1,-20,1,\n3000,0,0.2,-10,0.5,\n";
+    times[c.algo].push_back(reached ? t : INFINITY);
+  }
+  ReportOptions o;
+  o.dir = dir;
+  o.resamples = 400;
+  o.seed = 5;
+  write_report(o);
+  const auto rows = read_csv(dir + "/report/time_to_target.csv");
+  REQUIRE(rows.size() == 2 * 4);  // 2 algos x the 4 censored metrics: no run dropped
+  for (const auto& r : rows) {
+    INFO(r.at("algo") << " " << r.at("metric"));
+    REQUIRE(r.at("n") == "5");
+    REQUIRE(r.at("reached") == (r.at("algo") == "sac" ? "2" : "4"));
+  }
+  auto row = [&](const std::string& algo, const std::string& metric) {
+    for (const auto& r : rows)
+      if (r.at("algo") == algo && r.at("metric") == metric) return r;
+    FAIL("no row " << algo << " " << metric);
+    return rows[0];
+  };
+  // atacom-sac: one censored run of five, trimmed off by the IQM (floor(5/4) = 1 at each end).
+  const auto a = row("atacom-sac", "time_to_target_s");
+  std::vector<double> fin = times["atacom-sac"];
+  REQUIRE(close(a.at("iqm"), ref_iqm(fin)));  // the +inf is the top value, dropped by the trim
+  REQUIRE(close(a.at("median"), ref_quantile(fin, 0.5)));
+  REQUIRE(close(a.at("q3"), 248));  // the largest time: +inf lies beyond q3 here
+  // sac: three of five never reached: median and IQM are "not reached", never a number made up.
+  const auto b = row("sac", "time_to_target_s");
+  REQUIRE(b.at("median") == "inf");
+  REQUIRE(b.at("iqm") == "inf");
+  REQUIRE(b.at("iqm_ci_high") == "inf");
+  REQUIRE(close(b.at("q1"), 187));  // the second of 150, 187, inf, inf, inf
+  // Censored runs are not in summary.csv's plain statistics (their mean would be inf).
+  for (const auto& r : read_csv(dir + "/report/summary.csv")) REQUIRE(r.at("metric").find("to_target") == std::string::npos);
+  // P(atacom-sac improves on sac) counts a pair of never-reached runs as equal.
+  double wins = 0;
+  for (double x : times["atacom-sac"])
+    for (double y : times["sac"]) wins += x < y ? 1.0 : x == y ? 0.5 : 0.0;
+  bool found = false;
+  for (const auto& p : read_csv(dir + "/report/prob_improvement.csv"))
+    if (p.at("metric") == "time_to_target_s") {
+      found = true;
+      REQUIRE(close(p.at("p_improvement"), wins / 25.0));
+    }
+  REQUIRE(found);
+  const std::string md = slurp(dir + "/report/summary.md"), svg = slurp(dir + "/report/target_table.svg");
+  REQUIRE(md.find("| sac | time_to_target_s | 2/5 | not reached") != std::string::npos);
+  REQUIRE(md.find("censored") != std::string::npos);
+  REQUIRE(svg.find("2/5 reached") != std::string::npos);
+  REQUIRE(svg.find("not reached") != std::string::npos);
+  REQUIRE(slurp(dir + "/report/index.html").find("target_table.svg") == std::string::npos);  // inline, not linked
+  fs::remove_all(dir);
+}

@@ -109,17 +109,19 @@ TEST_CASE("run files: impossible checkpoint counters are refused by name, files 
   const std::string ck = dir + "/checkpoint.bin", good = slurp(ck), csv = slurp(dir + "/progress.csv");
   const std::string payload = read_checkpoint(ck).payload;
   // payload: tag (4) | env_steps next_eval next_ckpt train_episodes train_terminations train_violations
-  //          train_max_constraint wall_s recent_returns recent_return_sum last_train_return progress_rows (8 each)
+  //          train_max_constraint wall_s recent_returns recent_return_sum last_train_return progress_rows
+  //          eval_wall_s target_env_steps target_updates target_wall_s target_train_cost (8 each)
   struct Case { size_t off; int64_t value; const char* name; };
   const size_t learner = [&] {
-    size_t off = 4 + 12 * 8;
+    size_t off = 4 + 17 * 8;
     off += 8 + 8 * u64_at(payload, off);  // train info sums
     off += 8 + u64_at(payload, off);      // best evaluation
     return off + 4 + 4;                   // "LRNR", "SACL": the update budget
   }();
   for (const Case& c : {Case{12, INT64_MIN, "next_eval"}, Case{4, 1000000000000000000, "env_steps"},
                         Case{4 + 11 * 8, 0, "progress_rows"}, Case{4 + 11 * 8, 1000, "progress_rows"},
-                        Case{4 + 3 * 8, -5, "train_episodes"}}) {
+                        Case{4 + 3 * 8, -5, "train_episodes"}, Case{4 + 13 * 8, 7, "target_env_steps = 7"},
+                        Case{4 + 14 * 8, 5, "target_updates"}}) {
     INFO("field " << c.name);
     patch_checkpoint(ck, c.off, c.value);
     CHECK_THROWS_WITH(train(small_run(600), dir, true), Catch::Contains(c.name));

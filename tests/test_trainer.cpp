@@ -13,6 +13,8 @@
 #include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/trainer.hpp"
+#include "src/core/binary_io.hpp"
+#include "train/checkpoint.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -352,6 +354,23 @@ TEST_CASE("trainer: a run's policy loads from its directory and acts like the tr
   atacom::TrainedPolicy::load(dir)->act(obs.data(), 3, a3.data());
   CHECK(a1 == a3);
   CHECK_THROWS_WITH(atacom::TrainedPolicy::load(dir + "_missing"), Catch::Contains("config.json"));
+  // A policy file of container version 4 (the policy bytes unchanged since;
+  // checksum recomputed) still loads and acts the same; version 3 does not.
+  const std::string good = slurp(dir + "/policy_final.bin");
+  for (const uint32_t v : {atacom::kOldestPolicyVersion, atacom::kOldestPolicyVersion - 1}) {
+    std::string old_file = good.substr(0, good.size() - 8);
+    old_file[8] = char(v);
+    const uint64_t h = atacom::bin::fnv1a(old_file.data(), old_file.size());
+    old_file.append(reinterpret_cast<const char*>(&h), sizeof h);
+    std::ofstream(dir + "/policy_final.bin", std::ios::binary | std::ios::trunc) << old_file;
+    if (v == atacom::kOldestPolicyVersion) {
+      std::vector<double> a4(3);
+      atacom::TrainedPolicy::load(dir)->act(obs.data(), 3, a4.data());
+      CHECK(a1 == a4);
+    } else {
+      CHECK_THROWS_WITH(atacom::TrainedPolicy::load(dir), Catch::Contains("format version " + std::to_string(v)));
+    }
+  }
   std::ofstream(dir + "/policy_final.bin", std::ios::trunc) << "garbage";  // the policy lives here, not in the checkpoint
   CHECK_THROWS(atacom::TrainedPolicy::load(dir));
   fs::remove_all(dir);

@@ -32,7 +32,7 @@ void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt) {
   write_file_atomic(path, bytes);  // fsyncs the directory too: the rename is durable
 }
 
-Checkpoint read_checkpoint(const std::string& path) {
+Checkpoint read_checkpoint(const std::string& path, uint32_t oldest) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw std::runtime_error("cannot open checkpoint '" + path + "'");
   std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
@@ -42,10 +42,11 @@ Checkpoint read_checkpoint(const std::string& path) {
   if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) throw std::runtime_error(bad + "not an atacom checkpoint");
   uint32_t version;
   std::memcpy(&version, bytes.data() + sizeof(kMagic), 4);
-  if (version < kCheckpointVersion)
+  if (version < oldest)
     throw std::runtime_error(bad + "format version " + std::to_string(version) + ", written by an older build; this build reads version " +
-                             std::to_string(kCheckpointVersion) + " only (resume with the build that wrote it, or start the run again)");
-  if (version != kCheckpointVersion)
+                             std::to_string(oldest) + (oldest == kCheckpointVersion ? std::string(" only") : " to " + std::to_string(kCheckpointVersion)) +
+                             " (resume with the build that wrote it, or start the run again)");
+  if (version > kCheckpointVersion)
     throw std::runtime_error(bad + "format version " + std::to_string(version) + ", this build reads version " +
                              std::to_string(kCheckpointVersion));
   uint64_t mlen;

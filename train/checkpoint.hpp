@@ -18,8 +18,13 @@
 namespace atacom {
 
 // 2: trainer counters gained train_violations; 3: learner payload, policy
-// files; 4: the env section is the one env snapshot format (src/core/snapshot.hpp).
-constexpr uint32_t kCheckpointVersion = 4;
+// files; 4: the env section is the one env snapshot format (src/core/snapshot.hpp);
+// 5: trainer counters gained the evaluation time and the first evaluation that
+// met the quality target (time_to_target).
+constexpr uint32_t kCheckpointVersion = 5;
+// Policy files use the same container; their payload has not changed since
+// version 4, so files of version 4 still load (train/run_policy.cpp).
+constexpr uint32_t kOldestPolicyVersion = 4;
 
 struct Checkpoint {
   nlohmann::json manifest;
@@ -27,6 +32,8 @@ struct Checkpoint {
 };
 
 void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt);
-Checkpoint read_checkpoint(const std::string& path);
+// Reads files of versions oldest..kCheckpointVersion (older ones are refused
+// with the version and what to do).
+Checkpoint read_checkpoint(const std::string& path, uint32_t oldest = kCheckpointVersion);
 
 }  // namespace atacom

@@ -141,6 +141,21 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
   return r;
 }
 
+bool meets_target(const EnvTarget& target, const EvalResult& r) {
+  if (!target.defined() || !(r.final_distance <= target.distance)) return false;  // NaN never meets
+  for (const std::string& name : target.zero_info) {
+    const auto it = std::find(r.info_names.begin(), r.info_names.end(), name);
+    const size_t c = size_t(it - r.info_names.begin());
+    if (it == r.info_names.end() || c >= r.info.size() || r.info[c] != 0.0) return false;
+  }
+  return true;
+}
+
+nlohmann::json target_json(const EnvTarget& target) {
+  if (!target.defined()) return nullptr;
+  return {{"distance", target.distance}, {"zero_info", target.zero_info}};
+}
+
 nlohmann::json eval_json(const EvalResult& r) {
   nlohmann::json s = {{"eval_return_mean", jnum(r.return_mean)},
                       {"eval_return_std", jnum(r.return_std)},

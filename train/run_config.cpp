@@ -18,7 +18,8 @@ void to_json(nlohmann::json& j, const TrainConfig& c) {
   j = nlohmann::json{{"env", c.env}, {"algo", c.algo}, {"seed", c.seed}, {"steps", c.steps},
                      {"num_envs", c.num_envs}, {"eval_every", c.eval_every}, {"eval_episodes", c.eval_episodes},
                      {"eval_deterministic", c.eval_deterministic}, {"checkpoint_every", c.checkpoint_every},
-                     {"preset", c.preset}};
+                     {"preset", c.preset},
+                     {"stop_at_target", c.stop_at_target}};
 }
 
 void from_json(const nlohmann::json& j, TrainConfig& c) {
@@ -33,6 +34,7 @@ void from_json(const nlohmann::json& j, TrainConfig& c) {
   r.get("eval_deterministic", c.eval_deterministic);
   r.get("checkpoint_every", c.checkpoint_every, range::closed<int64_t>(0, limits::kMaxSteps));
   r.get("preset", c.preset);
+  r.get("stop_at_target", c.stop_at_target);
   r.finish();
 }
 

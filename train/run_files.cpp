@@ -1,5 +1,6 @@
 #include "train/run_files.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -27,14 +28,22 @@ std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector
     cols.push_back(c);
   for (size_t c = 0; c < spec.info_names.size() && c < spec.info_reduce.size(); ++c)
     if (spec.info_reduce[c] == InfoReduce::Sum) cols.push_back("train_" + spec.info_names[c]);
+  cols.insert(cols.end(), target_columns().begin(), target_columns().end());
   return cols;
 }
 
-ProgressFile::ProgressFile(std::string path, std::vector<std::string> columns)
-    : path_(std::move(path)), columns_(std::move(columns)) {
-  for (const std::string& c : columns_) {
+const std::vector<std::string>& target_columns() {
+  static const std::vector<std::string> c = {"time_to_target_s", "steps_to_target", "updates_to_target",
+                                             "train_cost_to_target"};
+  return c;
+}
+
+ProgressFile::ProgressFile(std::string path, std::vector<std::string> columns, const std::vector<std::string>& blank_nan)
+    : path_(std::move(path)), columns_(std::move(columns)), blank_nan_(columns_.size(), 0) {
+  for (size_t k = 0; k < columns_.size(); ++k) {
     if (!header_.empty()) header_ += ',';
-    header_ += c;
+    header_ += columns_[k];
+    for (const std::string& b : blank_nan) blank_nan_[k] = blank_nan_[k] || b == columns_[k];
   }
 }
 
@@ -76,7 +85,7 @@ void ProgressFile::append(const std::vector<double>& row) {
   std::string line;
   for (size_t k = 0; k < row.size(); ++k) {
     if (k) line += ',';
-    line += format(row[k]);
+    if (!(blank_nan_[k] && std::isnan(row[k]))) line += format(row[k]);
   }
   lines_.push_back(line);
   values_.push_back(row);
@@ -90,21 +99,20 @@ void ProgressFile::restore(int64_t rows) {
   std::string line;
   if (!std::getline(f, line))
     throw std::runtime_error("'" + path_ + "' does not start with this run's header (" + header_.substr(0, 60) + "...)");
-  // The file's columns in this run's order: at[c] = the file column of column c, -1 when the file has none.
-  std::vector<int> at(columns_.size(), -1);
+  // The file's columns: col_of[k] = this run's column of file column k (a
+  // header of an earlier build may lack columns added since).
   const bool same_header = line == header_;
-  size_t file_cols = 0;
+  std::vector<int> col_of;
   if (same_header) {
-    for (size_t c = 0; c < columns_.size(); ++c) at[c] = int(c);
-    file_cols = columns_.size();
+    for (size_t c = 0; c < columns_.size(); ++c) col_of.push_back(int(c));
   } else {
     std::istringstream hs(line);
-    for (std::string name; std::getline(hs, name, ','); ++file_cols) {
+    for (std::string name; std::getline(hs, name, ',');) {
       const int c = column(name);
-      if (c < 0 || at[size_t(c)] >= 0)
+      if (c < 0 || std::find(col_of.begin(), col_of.end(), c) != col_of.end())
         throw std::runtime_error("'" + path_ + "' does not start with this run's header (" + header_.substr(0, 60) +
                                  "...): its column '" + name + "' is not one of this run's");
-      at[size_t(c)] = int(file_cols);
+      col_of.push_back(c);
     }
   }
   lines_.clear();
@@ -114,30 +122,44 @@ void ProgressFile::restore(int64_t rows) {
     std::vector<std::string> texts;
     std::istringstream ls(line);
     std::string cell;
-    while (std::getline(ls, cell, ',')) {
+    // getline drops an empty last cell: the line's cells are its commas + 1.
+    const size_t n = size_t(std::count(line.begin(), line.end(), ',')) + 1;
+    while (cells.size() < n) {
+      if (!std::getline(ls, cell, ',')) cell.clear();
+      const size_t k = cells.size();
+      texts.push_back(cell);
+      if (cell.empty() && k < col_of.size() && blank_nan_[size_t(col_of[k])]) {
+        cells.push_back(NAN);
+        continue;
+      }
       char* end = nullptr;
       const double x = std::strtod(cell.c_str(), &end);
       if (cell.empty() || end != cell.c_str() + cell.size())
         throw std::runtime_error("'" + path_ + "' row " + std::to_string(lines_.size() + 1) + " holds '" + cell +
                                  "', not a number");
       cells.push_back(x);
-      texts.push_back(cell);
     }
-    if (cells.size() != file_cols)
+    if (cells.size() != col_of.size())
       throw std::runtime_error("'" + path_ + "' row " + std::to_string(lines_.size() + 1) + " has " +
-                               std::to_string(cells.size()) + " values for " + std::to_string(file_cols) +
+                               std::to_string(cells.size()) + " values for " + std::to_string(col_of.size()) +
                                " columns");
     if (same_header) {
       lines_.push_back(line);
       values_.push_back(cells);
       continue;
     }
+    // Columns the file lacks: NaN ("nan", or an empty cell where NaN is written so).
     std::vector<double> v(columns_.size(), std::numeric_limits<double>::quiet_NaN());
+    std::vector<const std::string*> text(columns_.size(), nullptr);
+    for (size_t k = 0; k < col_of.size(); ++k) {
+      v[size_t(col_of[k])] = cells[k];
+      text[size_t(col_of[k])] = &texts[k];
+    }
     std::string out;
     for (size_t c = 0; c < columns_.size(); ++c) {
-      if (at[c] >= 0) v[c] = cells[size_t(at[c])];
       if (c) out += ',';
-      out += at[c] >= 0 ? texts[size_t(at[c])] : std::string("nan");
+      if (text[c]) out += *text[c];
+      else if (!blank_nan_[c]) out += "nan";
     }
     lines_.push_back(out);
     values_.push_back(v);

@@ -9,10 +9,17 @@
 
 namespace atacom {
 
+// The columns of the quality target's first meeting (time_to_target_s,
+// steps_to_target, updates_to_target, train_cost_to_target): the last four of
+// progress.csv, empty cells until the target is met.
+const std::vector<std::string>& target_columns();
+
 class ProgressFile {
  public:
   ProgressFile() = default;
-  ProgressFile(std::string path, std::vector<std::string> columns);
+  // A NaN in a column of `blank_nan` is written as an empty cell (and an
+  // empty cell there reads back as NaN); elsewhere as "nan".
+  ProgressFile(std::string path, std::vector<std::string> columns, const std::vector<std::string>& blank_nan = {});
 
   // A new run: the header alone.
   void start();
@@ -37,6 +44,7 @@ class ProgressFile {
   void write() const;
   std::string path_;
   std::vector<std::string> columns_;
+  std::vector<uint8_t> blank_nan_;            // (columns) 1: NaN is an empty cell
   std::string header_;
   std::vector<std::string> lines_;            // rows as written
   std::vector<std::vector<double>> values_;   // rows as numbers

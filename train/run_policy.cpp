@@ -62,7 +62,7 @@ std::unique_ptr<TrainedPolicy> TrainedPolicy::load(const std::string& run_dir, R
   if (!fs::exists(path))
     throw std::runtime_error("run '" + run_dir + "' has no " + run_policy_file(which) +
                              (which == RunPolicy::Final ? " (unfinished, or written before policy files existed)" : ""));
-  const Checkpoint ck = read_checkpoint(path);
+  const Checkpoint ck = read_checkpoint(path, kOldestPolicyVersion);
   const nlohmann::json& m = ck.manifest;
   auto field = [&](const char* k) { return m.contains(k) ? m[k] : nlohmann::json(); };
   if (field("format") != "atacom-policy" || field("kind") != tp->inner_->kind() || field("env") != t.env ||

@@ -52,6 +52,16 @@ void validate(const RunCounters& c, const TrainConfig& t, const std::vector<doub
   if (std::isnan(c.train_max_constraint) || c.train_max_constraint == std::numeric_limits<double>::infinity())
     bad("train_max_constraint is not a number");
   if (!(std::isfinite(c.wall_s) && c.wall_s >= 0)) bad("wall_s is not a finite number >= 0");
+  if (!(std::isfinite(c.eval_wall_s) && c.eval_wall_s >= 0)) bad("eval_wall_s is not a finite number >= 0");
+  if (c.target_env_steps == -1) {
+    if (c.target_updates != -1 || !std::isnan(c.target_wall_s) || !std::isnan(c.target_train_cost))
+      bad("target_updates, target_wall_s and target_train_cost are set while target_env_steps = -1 (never met)");
+  } else if (c.target_env_steps < 1 || c.target_env_steps > c.env_steps || c.target_env_steps % N != 0 ||
+             c.target_updates < 0 || !(std::isfinite(c.target_wall_s) && c.target_wall_s >= 0 && c.target_wall_s <= c.wall_s) ||
+             !(std::isfinite(c.target_train_cost) && c.target_train_cost >= 0) || c.progress_rows < 1) {
+    bad("target_env_steps = " + n(c.target_env_steps) + " (or its updates, wall time, cost) does not fit a run at " +
+        n(c.env_steps) + " steps");
+  }
   if (c.recent_returns < 0 || c.recent_returns > c.train_episodes) bad("recent_returns is outside [0, train_episodes]");
   if (!std::isfinite(c.recent_return_sum)) bad("recent_return_sum is not finite");
   if (std::isinf(c.last_train_return)) bad("last_train_return is infinite");

@@ -1,6 +1,7 @@
 // The trainer's own state (the learner keeps its own) and the checkpoint
 // payload that holds both:
-//   "CNTR" counters | info sums | best evaluation (JSON text) |
+//   "CNTR" counters (since checkpoint version 5 with the evaluation time and
+//   the first evaluation that met the quality target) | info sums | best evaluation (JSON text) |
 //   "LRNR" learner payload | "STRM" action streams, observations | "ENVS" env batch |
 //   "EPST" steps of the finished training episodes (i64; absent in checkpoints
 //   of earlier builds, which load with it unknown) |
@@ -36,12 +37,18 @@ struct RunCounters {
   double recent_return_sum = 0;
   double last_train_return = std::numeric_limits<double>::quiet_NaN();
   int64_t progress_rows = 0;      // rows of progress.csv
+  double eval_wall_s = 0;         // of wall_s, the time spent evaluating
+  // The first evaluation that met the env's quality target (-1 and NaN: none yet).
+  int64_t target_env_steps = -1, target_updates = -1;
+  double target_wall_s = std::numeric_limits<double>::quiet_NaN();
+  double target_train_cost = std::numeric_limits<double>::quiet_NaN();  // training collisions + violating steps until then
+  bool target_met() const { return target_env_steps >= 0; }
 
   template <class F>
   void visit(F&& f) {
     f(env_steps); f(next_eval); f(next_ckpt); f(train_episodes); f(train_terminations); f(train_violations);
     f(train_max_constraint); f(wall_s); f(recent_returns); f(recent_return_sum); f(last_train_return);
-    f(progress_rows);
+    f(progress_rows); f(eval_wall_s); f(target_env_steps); f(target_updates); f(target_wall_s); f(target_train_cost);
   }
 };
 

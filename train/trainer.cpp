@@ -73,6 +73,7 @@ class Run {
   void step();
   EvalResult evaluate_now();
   void record(const EvalResult& ev);
+  double train_cost() const;
   void save_checkpoint();
   void write_policy(const std::string& file);
   void print_progress(bool force, const EvalResult* ev);
@@ -82,6 +83,8 @@ class Run {
   double wall() const {
     return st_.counters.wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
+  double eval_wall() const { return st_.counters.eval_wall_s + eval_s_; }
+  bool stop_here() const { return cfg_.train.stop_at_target && st_.counters.target_met(); }
   std::string path(const char* name) const { return (fs::path(opts_.out_dir) / name).string(); }
 
   RunConfig cfg_;
@@ -97,10 +100,11 @@ class Run {
   ProgressFile progress_;
   std::vector<double> actions_;    // (N x A)
   std::chrono::steady_clock::time_point start_, last_print_;
-  double eval_s_ = 0;              // wall time spent evaluating (excluded from steps/s)
+  double eval_s_ = 0;              // wall time this process spent evaluating (excluded from steps/s)
   int64_t steps_at_start_ = 0;
   double last_eval_return_ = kNaN;
   int64_t last_ckpt_steps_ = -1;   // env_steps of the newest checkpoint written by this process
+  bool stopped_ = false;           // the run ended at the quality target before its budget (train.stop_at_target)
 };
 
 Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts), algo_(&find_algorithm(cfg.train.algo)) {
@@ -137,13 +141,14 @@ Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts
     if (policy_->obs_dim() != D_ || policy_->act_dim() != A_)
       throw std::invalid_argument("the " + policy_->kind() + " policy does not fit env '" + t.env + "'");
   }
-  progress_ = ProgressFile(path("progress.csv"), progress_columns(spec_, learner_cols));
+  progress_ = ProgressFile(path("progress.csv"), progress_columns(spec_, learner_cols), target_columns());
 }
 
 uint64_t Run::config_hash() const {
   nlohmann::json j = run_config_json(cfg_);
   j["train"].erase("steps");   // a resumed run may extend its budget
   j["train"].erase("preset");  // every value it gave is explicit (and runs from before presets resume)
+  j["train"].erase("stop_at_target");  // or stop at the target (where it ends, not how it trains)
   j.erase("host");            // and continue on another machine
   const std::string s = j.dump();
   return bin::fnv1a(s.data(), s.size());
@@ -200,7 +205,15 @@ EvalResult Run::evaluate_now() {
 void Run::record(const EvalResult& ev) {
   RunCounters& c = st_.counters;
   const double train_ret = c.recent_returns > 0 ? c.recent_return_sum / double(c.recent_returns) : c.last_train_return;
-  std::vector<double> row = {double(c.env_steps), learner_ ? double(learner_->updates()) : 0.0, wall(),
+  const double now = wall();
+  // The first evaluation that meets the env's quality target.
+  if (!c.target_met() && meets_target(spec_.target, ev)) {
+    c.target_env_steps = c.env_steps;
+    c.target_updates = learner_ ? learner_->updates() : 0;
+    c.target_wall_s = now;
+    c.target_train_cost = train_cost();
+  }
+  std::vector<double> row = {double(c.env_steps), learner_ ? double(learner_->updates()) : 0.0, now,
                              ev.return_mean, ev.return_std, train_ret};
   if (learner_) {
     const std::vector<double> lv = learner_->progress_values();
@@ -214,6 +227,9 @@ void Run::record(const EvalResult& ev) {
     row.push_back(v);
   for (int col = 0; col < ninfo_; ++col)
     if (spec_.info_reduce[size_t(col)] == InfoReduce::Sum) row.push_back(st_.train_info_sums[size_t(col)]);
+  for (double v : {c.target_wall_s, c.target_met() ? double(c.target_env_steps) : kNaN,
+                   c.target_met() ? double(c.target_updates) : kNaN, c.target_train_cost})
+    row.push_back(v);
   progress_.append(row);
   c.progress_rows = progress_.rows();
   c.recent_returns = 0;
@@ -237,6 +253,15 @@ void Run::record(const EvalResult& ev) {
   }
 }
 
+// Training collisions (the env's "collision" column, every contact) plus the
+// steps with a constraint row above its tolerance, so far.
+double Run::train_cost() const {
+  double collisions = 0;
+  for (int col = 0; col < ninfo_; ++col)
+    if (spec_.info_names[size_t(col)] == "collision") collisions = st_.train_info_sums[size_t(col)];
+  return collisions + double(st_.counters.train_violations);
+}
+
 void Run::write_policy(const std::string& file) {
   const TrainConfig& t = cfg_.train;
   write_policy_file(path(file.c_str()), *policy_,
@@ -246,7 +271,8 @@ void Run::write_policy(const std::string& file) {
 }
 
 void Run::save_checkpoint() {
-  const double wall_before = st_.counters.wall_s;
+  const double wall_before = st_.counters.wall_s, eval_before = st_.counters.eval_wall_s;
+  st_.counters.eval_wall_s = eval_wall();
   st_.counters.wall_s = wall();  // the checkpoint holds the time so far
   Checkpoint ck;
   ck.payload = save_run_payload(st_, *learner_, *env_);
@@ -260,6 +286,7 @@ void Run::save_checkpoint() {
   const nlohmann::json lm = learner_->manifest();
   for (auto it = lm.begin(); it != lm.end(); ++it) ck.manifest[it.key()] = it.value();
   st_.counters.wall_s = wall_before;
+  st_.counters.eval_wall_s = eval_before;
   write_checkpoint_atomic(path("checkpoint.bin"), ck);
   write_file_atomic(path("checkpoint.json"), ck.manifest.dump(2) + "\n");
   last_ckpt_steps_ = st_.counters.env_steps;
@@ -353,7 +380,18 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
   s["eval_deterministic"] = t.eval_deterministic;
   s["env_steps"] = c.env_steps;
   s["updates"] = learner_ ? learner_->updates() : 0;
-  s["wall_s"] = wall();
+  const double w = wall();
+  s["wall_s"] = w;
+  // The evaluations' share of the wall time (evaluation runs inside the budget's wall time).
+  s["eval_wall_s"] = eval_wall();
+  s["eval_share"] = w > 0 ? nlohmann::json(eval_wall() / w) : nlohmann::json(nullptr);
+  // The quality target and the first evaluation that met it (null: never).
+  s["target"] = target_json(spec_.target);
+  s["time_to_target_s"] = jnum(c.target_wall_s);
+  s["steps_to_target"] = c.target_met() ? nlohmann::json(c.target_env_steps) : nlohmann::json(nullptr);
+  s["updates_to_target"] = c.target_met() ? nlohmann::json(c.target_updates) : nlohmann::json(nullptr);
+  s["train_cost_to_target"] = jnum(c.target_train_cost);
+  s["stopped_at_target"] = stopped_;
   s["train_episodes"] = c.train_episodes;
   s["train_terminations"] = c.train_terminations;
   s["train_violations"] = c.train_violations;
@@ -392,6 +430,7 @@ TrainSummary Run::finish(const EvalResult& last) {
   out.env_steps = st_.counters.env_steps;
   out.updates = learner_ ? learner_->updates() : 0;
   out.wall_s = wall();
+  out.stopped_at_target = stopped_;
   out.agent_hash = learner_ ? learner_->state_hash() : 0;
   out.summary = summary_json(last);
   return out;
@@ -429,8 +468,12 @@ TrainSummary Run::go() {
   EvalResult last;
   bool have_eval = false;
   while (c.env_steps < t.steps) {
+    if (stop_here()) {  // resumed a run that had stopped at its target
+      stopped_ = true;
+      break;
+    }
     step();
-    const bool end = c.env_steps >= t.steps;
+    bool end = c.env_steps >= t.steps;
     const bool stop = (opts_.stop_after > 0 && c.env_steps >= opts_.stop_after) ||
                       (opts_.stop_signal && *opts_.stop_signal != 0);
     if (c.env_steps >= c.next_eval || end) {
@@ -439,6 +482,12 @@ TrainSummary Run::go() {
       have_eval = true;
       record(last);
       print_progress(true, &last);
+      if (!end && stop_here()) {  // the run ends here: checkpoint and files as at its budget
+        end = stopped_ = true;
+        if (opts_.log)
+          *opts_.log << (opts_.log_is_tty ? "\n" : "") << "atacom train: quality target met at " << c.env_steps
+                     << " env steps: the run stops here (train.stop_at_target)\n";
+      }
       if (t.checkpoint_every == 0) save_checkpoint();
     } else {
       print_progress(false, nullptr);
@@ -451,6 +500,7 @@ TrainSummary Run::go() {
       if (last_ckpt_steps_ != c.env_steps) save_checkpoint();
       break;
     }
+    if (stopped_) break;
   }
   if (opts_.log && opts_.log_is_tty) *opts_.log << "\n";
   if (!have_eval) {  // resumed a finished run, or stopped early
@@ -460,7 +510,7 @@ TrainSummary Run::go() {
     last_eval_return_ = last.return_mean;
   }
   TrainSummary out = finish(last);
-  if (c.env_steps >= t.steps) {
+  if (c.env_steps >= t.steps || stopped_) {
     write_policy(run_policy_file(RunPolicy::Final));
     write_file_atomic(path("summary.json"), out.summary.dump(2) + "\n");
   }

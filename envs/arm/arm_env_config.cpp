@@ -1,5 +1,6 @@
 // Config of the manipulation envs: the default factory per task, validation, JSON.
 #include "src/core/config_json.hpp"
+#include "src/core/env_target.hpp"
 #include "src/core/limits.hpp"
 #include "envs/arm/arm_env_config.hpp"
 
@@ -83,6 +84,7 @@ void set_hri_defaults(ArmEnvConfig& c) {
   c.goal_library_size = 256;
   // Fallback start (checked safe against the static and upright rows at construction).
   c.home = {0.0, 0.0, 1.5708, 1.5708, 1.5708, 0.0, 0.0};
+  c.target = {0.15, {"spill"}};  // the goal within 15 cm, the cup never spilled
 }
 
 }  // namespace
@@ -201,6 +203,7 @@ void to_json(json& j, const ArmEnvConfig& c) {
        {"goal_library_seed", c.goal_library_seed},
        {"goal_jitter", c.goal_jitter},
        {"home", c.home}};
+  write_env_target(j, c.target);
   if (!c.sdf.empty()) j["sdf"] = c.sdf;
   if (c.task == ArmTask::Hri) {
     const ArmHriConfig& h = c.hri;
@@ -263,6 +266,7 @@ void from_json(const json& j, ArmEnvConfig& c) {
   c.goal_jitter = r.number("goal_jitter", range::closed_open(0.0, 1.0));
   const auto h = num_array(r.at("home"), kArmJoints, r.path("home"));
   std::copy(h.begin(), h.end(), c.home.begin());
+  c.target = read_env_target(r);
   c.sdf.clear();
   if (j.contains("sdf")) {
     const json& sd = r.at("sdf");

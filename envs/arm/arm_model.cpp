@@ -7,6 +7,7 @@
 
 #include "envs/arm/arm_kernels.hpp"
 #include "envs/arm/arm_learned_sdf.hpp"
+#include "src/core/env_target.hpp"
 
 namespace atacom {
 
@@ -270,6 +271,8 @@ void ArmModel::build_spec() {
     s.info_names.insert(s.info_names.end(), {"human_collision", "spill", "min_human_distance", "tilt"});
     s.info_reduce.insert(s.info_reduce.end(), {InfoReduce::Sum, InfoReduce::Sum, InfoReduce::Last, InfoReduce::Mean});
   }
+  s.target = config.target;
+  check_env_target(s);
 }
 
 const HumanModel& arm_shared_human_model() { return human_data().model; }

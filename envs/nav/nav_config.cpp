@@ -8,6 +8,7 @@
 #include "envs/nav/nav_env.hpp"
 #include "atacom/projector.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/env_target.hpp"
 #include "src/core/limits.hpp"
 
 namespace atacom {
@@ -122,6 +123,7 @@ void to_json(nlohmann::json& j, const NavConfig& c) {
        {{"velocity_iterations", c.box2d.velocity_iterations},
         {"position_iterations", c.box2d.position_iterations}}},
   };
+  write_env_target(j, c.target);
 }
 
 void from_json(const nlohmann::json& j, NavConfig& out) {
@@ -187,6 +189,7 @@ void from_json(const nlohmann::json& j, NavConfig& out) {
     c.box2d.position_iterations = s.integer("position_iterations", range::closed(1, 1000));
     s.finish();
   }
+  c.target = read_env_target(r);
   r.finish();
   validate(c);
   out = c;

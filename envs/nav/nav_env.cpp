@@ -15,6 +15,7 @@
 
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
+#include "src/core/env_target.hpp"
 #include "src/core/snapshot.hpp"
 
 namespace atacom {
@@ -118,6 +119,8 @@ NavEnv::NavEnv(const NavConfig& config, int num_envs) : cfg_(config) {
   spec_.info_reduce = {InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Last, InfoReduce::Mean,
                        InfoReduce::Last, InfoReduce::Last, InfoReduce::Sum,  InfoReduce::Sum};
   spec_.cost_events = {"collision"};  // wall or Fetch contact
+  spec_.target = cfg_.target;
+  check_env_target(spec_);
 
   buffers_.resize(spec_, num_envs);
   st_.resize(num_envs);

@@ -111,6 +111,9 @@ struct NavConfig {
     int velocity_iterations = 1;
     int position_iterations = 1;
   } box2d;
+
+  // Quality target (time_to_target, docs/training.md): within 0.5 m of the goal.
+  EnvTarget target{0.5, {}};
 };
 
 // The one default factory: the paper's navigation env.

@@ -11,6 +11,7 @@
 #pragma once
 #include <cstdint>
 #include <iosfwd>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,17 @@ enum class InfoReduce : uint8_t {
   Sum = 1,   // summed over the episode (e.g. collision, violation counts)
   Max = 2,   // maximum over the episode (e.g. max_constraint)
   Mean = 3,  // mean over the episode's steps
+};
+
+// The env's quality target, the bar of `atacom train`'s time_to_target
+// (docs/training.md): an evaluation meets it when its mean final_distance is
+// <= distance and every info column named in zero_info averages 0 over the
+// evaluation episodes (HRI-Sim: no spill). The env declares it as data, from
+// its config keys target_distance and target_zero_info (src/core/env_target.hpp).
+struct EnvTarget {
+  double distance = std::numeric_limits<double>::quiet_NaN();  // m; NaN: the env declares no target
+  std::vector<std::string> zero_info;                          // info columns that must be 0 in evaluation
+  bool defined() const { return distance == distance; }
 };
 
 struct EnvSpec {
@@ -40,6 +52,7 @@ struct EnvSpec {
   std::vector<std::string> cost_events;
   std::vector<std::string> info_names;        // columns of EnvBuffers::info
   std::vector<InfoReduce> info_reduce;        // (info_names.size()) per-episode aggregation
+  EnvTarget target;                           // quality target (undefined: none)
 };
 
 struct EnvBuffers {

@@ -45,6 +45,13 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
 // The env seed of evaluation round r (round 0: seed ^ a fixed salt).
 uint64_t eval_env_seed(uint64_t seed, int round);
 
+// The quality target's verdict on an evaluation (EnvTarget in atacom/env.hpp):
+// the target is defined, final_distance <= target.distance, and every
+// zero_info column averages exactly 0 (a column the result lacks never meets).
+bool meets_target(const EnvTarget& target, const EvalResult& r);
+// {"distance": m, "zero_info": [names]}, or null when the env declares no target.
+nlohmann::json target_json(const EnvTarget& target);
+
 // {"eval_return_mean", "eval_return_std", "eval_discounted_return_mean", ...,
 //  "early_terminations", "avg_episode_steps", "violations", "eval_cost_mean", "eval_max_constraint",
 //  "eval_episode_max_constraint",

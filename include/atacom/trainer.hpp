@@ -8,7 +8,10 @@
 //   progress.csv     one row per evaluation (columns: progress_columns())
 //   progress.svg     eval return vs env steps, redrawn after every evaluation
 //   summary.json     final evaluation, run-wide training counters, the best
-//                    evaluation ("best"), the policy files, the host
+//                    evaluation ("best"), the first evaluation that met the
+//                    env's quality target (time_to_target_s, steps_to_target,
+//                    updates_to_target, train_cost_to_target; null: never),
+//                    the evaluation's share of wall time, the policy files, the host
 //   checkpoint.bin   checkpoint (train/checkpoint.hpp); checkpoint.json its manifest
 //   policy_final.bin the policy at the end of training   (learning algorithms only)
 //   policy_best.bin  the policy of the best evaluation (Learner::best_score: SAC's eval return)
@@ -44,6 +47,10 @@ struct TrainConfig {
   bool eval_deterministic = true; // mean action (true) or sampled (false)
   int64_t checkpoint_every = 0;   // env steps between checkpoints; 0: at every evaluation
   std::string preset = "paper";   // learner preset (train/presets.hpp) the other sections were laid over
+  // End the run at the first evaluation that meets the env's quality target
+  // (EnvSpec::target; summary.json then says "stopped_at_target": true).
+  // Not part of the checkpoint's config hash: it moves where a run ends, not its trajectory.
+  bool stop_at_target = false;
 };
 // The one default factory.
 TrainConfig default_train_config();
@@ -88,6 +95,7 @@ struct TrainSummary {
   EvalResult final_eval;
   int64_t env_steps = 0, updates = 0;
   double wall_s = 0;
+  bool stopped_at_target = false; // ended at the first evaluation that met the target (train.stop_at_target)
   uint64_t agent_hash = 0;        // the learner's state_hash() at the end (0 without a learner)
   nlohmann::json summary;         // what summary.json holds
 };
@@ -146,9 +154,12 @@ inline std::unique_ptr<TrainedPolicy> load_run_policy(const std::string& run_dir
 // eval_discounted_return_mean, eval_discounted_return_std,
 // eval_max_constraint, eval_episode_max_constraint, train_episodes,
 // train_terminations, train_violations, train_cost,
-// train_<info> for every summed info column. eval_cost_mean: the evaluation
-// episodes' summed step cost (EnvBuffers::cost), averaged; train_cost: the
-// step cost summed over every training step so far.
+// train_<info> for every summed info column, time_to_target_s,
+// steps_to_target, updates_to_target, train_cost_to_target (the first
+// evaluation that met the quality target, at or before this row; empty
+// cells until one has). eval_cost_mean: the evaluation episodes' summed step
+// cost (EnvBuffers::cost), averaged; train_cost: the step cost summed over
+// every training step so far.
 std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector<std::string>& learner_columns);
 
 // Hand-written SVG line chart of eval return (mean +- std band) vs env steps.

@@ -30,7 +30,7 @@ struct TrainArgs {
   std::string env, algo, config, out, sdf, preset;
   int64_t seed = 0, steps = 0;
   int envs = 0, eval_episodes = 0;
-  bool resume = false;
+  bool resume = false, stop_at_target = false;
   CLI::Option *o_env = nullptr, *o_algo = nullptr, *o_seed = nullptr, *o_steps = nullptr, *o_envs = nullptr,
               *o_eval = nullptr;
 };
@@ -61,6 +61,7 @@ int run(const TrainArgs& a) {
     same(a.o_envs, a.envs == rc.train.num_envs, "--envs");
     same(a.o_eval, a.eval_episodes == rc.train.eval_episodes, "--eval-episodes");
     if (a.o_steps->count() > 0) rc.train.steps = a.steps;  // a resumed run may extend its budget (never shrink it)
+    if (a.stop_at_target) rc.train.stop_at_target = true;  // and may be told to stop at its target
   } else {
     nlohmann::json file = a.config.empty() ? nlohmann::json::object() : read_json_file(a.config);
     if (!file.is_object()) throw std::invalid_argument("config file must hold a JSON object");
@@ -75,6 +76,7 @@ int run(const TrainArgs& a) {
     if (a.o_envs->count()) t["num_envs"] = a.envs;
     if (a.o_eval->count()) t["eval_episodes"] = a.eval_episodes;
     if (!a.preset.empty()) t["preset"] = a.preset;
+    if (a.stop_at_target) t["stop_at_target"] = true;
     if (!a.sdf.empty()) {
       if (!t.contains("env") || !t["env"].is_string())
         throw std::invalid_argument("--sdf needs the env named (--env or train.env in --config)");
@@ -95,7 +97,7 @@ int run(const TrainArgs& a) {
   std::signal(SIGUSR1, on_checkpoint_signal);
   if (const char* k = std::getenv("ATACOM_TEST_KILL_AT_WRITE")) arm_kill_at_write(std::atol(k));  // crash tests
   const TrainSummary s = run_training(rc, opts);
-  if (g_checkpoint_signal != 0 && s.env_steps < rc.train.steps) {
+  if (g_checkpoint_signal != 0 && s.env_steps < rc.train.steps && !s.stopped_at_target) {
     std::cerr << "atacom train: SIGUSR1: checkpoint written at " << s.env_steps << " env steps; continue with --resume\n";
     return 75;
   }
@@ -139,6 +141,8 @@ const RegisterCommand reg{Command{
           ->check(CLI::IsMember({"analytic", "learned"}));
       app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();
       app.add_flag("--resume", a->resume, "continue the run in --out from its last checkpoint");
+      app.add_flag("--stop-at-target", a->stop_at_target,
+                   "end the run at the first evaluation that meets the env's quality target (train.stop_at_target)");
       return [a]() { return run(*a); };
     }}};
 

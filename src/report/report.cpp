@@ -1,6 +1,7 @@
 // atacom report: tables (CSV, Markdown), figures (SVG) and one HTML page.
 #include "src/report/report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -32,11 +33,14 @@ std::string short_num(double v) {
   std::snprintf(b, sizeof(b), "%.4g", v);
   return b;
 }
+// A censored statistic: +inf reads "not reached".
+std::string target_num(double v) { return std::isinf(v) && v > 0 ? "not reached" : short_num(v); }
 std::string html_escape(const std::string& s) { return svg_escape(s); }
 
 struct Row {
   std::string env, algo, metric;
   size_t n = 0;
+  size_t reached = 0;  // finite values (censored metrics: the runs that met the target)
   double mean = NAN, std = NAN, median = NAN, q1 = NAN, q3 = NAN, iqm = NAN;
   Interval ci{NAN, NAN};
 };
@@ -53,17 +57,23 @@ struct Drop {
   bool dropped;
 };
 
-std::vector<Row> table_rows(const ReportData& d) {
+// The rows of the plain metrics (censored = false) or of the censored ones,
+// whose runs that never met the target are in v as +inf (no mean or std).
+std::vector<Row> table_rows(const ReportData& d, bool censored) {
   std::vector<Row> rows;
   for (const auto& env : d.envs)
     for (const auto& algo : d.algos)
       for (const ReportMetric& m : report_metrics()) {
+        if (m.censored != censored) continue;
         const std::vector<double> v = metric_values(d, env, algo, m.key);
         if (v.empty()) continue;
         Row r{env, algo, m.key};
         r.n = v.size();
-        r.mean = mean_of(v);
-        r.std = sample_std(v);
+        for (double x : v) r.reached += std::isfinite(x);
+        if (!censored) {
+          r.mean = mean_of(v);
+          r.std = sample_std(v);
+        }
         r.median = quantile(v, 0.5);
         r.q1 = quantile(v, 0.25);
         r.q3 = quantile(v, 0.75);
@@ -83,7 +93,7 @@ std::vector<Pi> improvements(const ReportData& d) {
     for (const auto& base : d.algos) {
       if (base == kMain) continue;
       for (const ReportMetric& m : report_metrics()) {
-        if (!m.boxplot) continue;
+        if (!m.boxplot && !m.censored) continue;
         const std::vector<double> x = metric_values(d, env, kMain, m.key), y = metric_values(d, env, base, m.key);
         if (x.empty() || y.empty()) continue;
         out.push_back({env, m.key, base, x.size(), y.size(), probability_of_improvement(x, y, m.higher_better)});
@@ -115,6 +125,16 @@ const ReportMetric& metric_info(const std::string& key) {
   throw std::logic_error("unknown report metric " + key);
 }
 
+std::string target_methods_text() {
+  return "Time to target: the first evaluation whose mean final distance is within the env's target distance (and, "
+         "where the env says so, every listed evaluation column 0: HRI-Sim no spill), as summary.json records it. A "
+         "run that never met the target is censored, not dropped: it counts as +inf (later than every run that met "
+         "it; its budget is a lower bound). Quantiles and the IQM are computed over all finished runs with those "
+         "values, so the IQM is finite while at most a quarter of the runs (floor(n/4)) never reached the target; "
+         "the bootstrap interval is formed the same way, and a bound reads 'not reached' when more than 2.5% of the "
+         "resamples hold too many censored runs for a finite IQM.";
+}
+
 std::string methods_text(const ReportData& d) {
   return "Statistics over seeds per (env, algo): mean, sample std (n - 1), median and quartiles (linear "
          "interpolation, numpy's default), IQM = 25%-trimmed mean, its 95% percentile-bootstrap interval (" +
@@ -126,8 +146,10 @@ std::string methods_text(const ReportData& d) {
          "training metrics count over all training steps. Cost: a step costs 1 when a constraint row exceeds its "
          "stated tolerance or a collision / joint-limit event happens (Safety-Gymnasium's convention); eval_cost_mean "
          "is the final policy's cost per episode, train_cost the cost summed over training; a cost axis is "
-         "log10(1 + cost) when its largest value is 100 or more. The training cost until a quality target is not "
-         "reported: no run records when it reached one. Colours are fixed per algorithm in every figure. A run is flagged when its final evaluation return is "
+         "log10(1 + cost) when its largest value is 100 or more; the training cost until the quality target is "
+         "the time-to-target figure's train_cost_to_target (collisions + violating steps, so a step with both "
+         "counts twice there and once in train_cost). Colours are fixed per algorithm in every figure. A run is "
+         "flagged when its final evaluation return is "
          "more than " + short_num(100 * d.opts.drop_return_frac) + "% of |best| below its best evaluation's, or its "
          "final distance more than " + short_num(d.opts.drop_distance) + " m above.";
 }
@@ -150,7 +172,7 @@ ReportResult write_report(const ReportOptions& opts) {
   fs::create_directories(res.report_dir);
   const auto out = [&](const std::string& name) { return (fs::path(res.report_dir) / name).string(); };
 
-  const std::vector<Row> rows = table_rows(d);
+  const std::vector<Row> rows = table_rows(d, false), trows = table_rows(d, true);
   const std::vector<Pi> pis = improvements(d);
   const std::vector<Drop> dr = drops(d);
   for (const Drop& x : dr)
@@ -163,6 +185,12 @@ ReportResult write_report(const ReportOptions& opts) {
            "," + num(r.median) + "," + num(r.q1) + "," + num(r.q3) + "," + num(r.iqm) + "," + num(r.ci.low) + "," +
            num(r.ci.high) + "\n";
   write_file_atomic(out("summary.csv"), csv);
+  std::string tcsv = "env,algo,metric,n,reached,median,q1,q3,iqm,iqm_ci_low,iqm_ci_high\n";
+  for (const Row& r : trows)
+    tcsv += r.env + "," + r.algo + "," + r.metric + "," + std::to_string(r.n) + "," + std::to_string(r.reached) + "," +
+            num(r.median) + "," + num(r.q1) + "," + num(r.q3) + "," + num(r.iqm) + "," + num(r.ci.low) + "," +
+            num(r.ci.high) + "\n";
+  write_file_atomic(out("time_to_target.csv"), tcsv);
   std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement\n";
   for (const Pi& p : pis)
     pcsv += p.env + "," + p.metric + "," + kMain + "," + p.baseline + "," + std::to_string(p.nx) + "," +
@@ -182,11 +210,17 @@ ReportResult write_report(const ReportOptions& opts) {
 
   // ---- figures
   std::vector<std::pair<std::string, std::string>> figs;  // file, svg
+  std::vector<std::string> target_envs;  // envs with a censored row: a target figure and table
   for (const auto& env : d.envs) {
     figs.emplace_back("box_" + env + ".svg", boxplot_svg(d, env));
     figs.emplace_back("curves_" + env + ".svg", curves_svg(d, env));
     figs.emplace_back("cost_return_" + env + ".svg", cost_return_svg(d, env));
     figs.emplace_back("train_cost_" + env + ".svg", train_cost_svg(d, env));
+    bool any = false;
+    for (const Row& r : trows) any = any || r.env == env;
+    if (!any) continue;
+    target_envs.push_back(env);
+    figs.emplace_back("target_" + env + ".svg", target_boxplot_svg(d, env));
   }
   for (const auto& [f, svg] : figs) write_file_atomic(out(f), svg);
 
@@ -223,6 +257,27 @@ ReportResult write_report(const ReportOptions& opts) {
     }
     md << "\n";
     html << "</table>\n";
+    if (std::find(target_envs.begin(), target_envs.end(), env) != target_envs.end()) {
+      md << "### Time to target\n\n![time to target](target_" << env << ".svg)\n\n"
+         << "| algo | metric | reached | IQM [95% CI] | median [q1, q3] |\n|---|---|---|---|---|\n";
+      html << "<h3>Time to target</h3><div>";
+      for (const auto& [f, svg] : figs)
+        if (f == "target_" + env + ".svg") html << svg;
+      html << "</div><table><tr><th>algo</th><th>metric</th><th>reached</th><th>IQM [95% CI]</th>"
+              "<th>median [q1, q3]</th></tr>\n";
+      for (const Row& r : trows) {
+        if (r.env != env) continue;
+        const std::string reached = std::to_string(r.reached) + "/" + std::to_string(r.n);
+        const std::string iq = target_num(r.iqm) + " [" + target_num(r.ci.low) + ", " + target_num(r.ci.high) + "]";
+        const std::string mq = target_num(r.median) + " [" + target_num(r.q1) + ", " + target_num(r.q3) + "]";
+        md << "| " << r.algo << " | " << r.metric << " | " << reached << " | " << iq << " | " << mq << " |\n";
+        html << "<tr><td class=\"l\">" << r.algo << "</td><td class=\"l\">" << r.metric << "</td><td"
+             << (r.reached < r.n ? " class=\"bad\"" : "") << ">" << reached << "</td><td>" << iq << "</td><td>" << mq
+             << "</td></tr>\n";
+      }
+      md << "\n" << target_methods_text() << "\n\n";
+      html << "</table><p class=\"note\">" << html_escape(target_methods_text()) << "</p>\n";
+    }
     bool any = false;
     for (const Pi& p : pis) any = any || p.env == env;
     if (any) {
@@ -271,7 +326,8 @@ ReportResult write_report(const ReportOptions& opts) {
     }
     html << "</table>\n";
   }
-  html << "<p class=\"note\">Files: summary.csv, summary.md, prob_improvement.csv, final_vs_best.csv, missing.csv and "
+  html << "<p class=\"note\">Files: summary.csv, time_to_target.csv, summary.md, prob_improvement.csv, "
+          "final_vs_best.csv, missing.csv and "
           "the SVG figures beside this page.</p></body></html>\n";
   write_file_atomic(out("summary.md"), md.str());
   write_file_atomic(res.index_html, html.str());

@@ -2,11 +2,15 @@
 // (src/sweep/sweep_state.hpp), written to DIR/report/:
 //   summary.csv           env, algo, metric, n, mean, std, median, q1, q3, iqm, iqm_ci_low, iqm_ci_high
 //                         (metric = the summary.json key; "best.<key>" for the best evaluation)
+//   time_to_target.csv    env, algo, metric, n, reached, median, q1, q3, iqm, iqm_ci_low, iqm_ci_high for
+//                         the censored metrics (time_to_target_s, ...; "inf": not reached, see below)
 //   prob_improvement.csv  env, metric, algo, baseline, n_algo, n_baseline, p_improvement (ATACOM-SAC vs each)
 //   final_vs_best.csv     per run: final and best evaluation side by side, drop = 1 when the final one fell far
 //   missing.csv           cells without a finished run: state and log
 //   summary.md            all of it as tables
 //   box_<env>.svg         one panel per metric, one box per algo, a point per seed
+//   target_<env>.svg      the same for the censored metrics (envs with a quality target), runs that
+//                         never met it drawn on a "not reached" line, "reached k/n" under each box
 //   curves_<env>.svg      eval return and final distance vs env steps: IQM over seeds, bootstrap band
 //   cost_return_<env>.svg final return vs the final policy's episode cost and vs the training cost:
 //                         a point per seed, an IQM diamond per algorithm
@@ -25,6 +29,11 @@ struct ReportMetric {
   const char* label;
   bool higher_better;
   bool boxplot;        // a panel of the boxplot grid
+  // Right-censored (time_to_target_s and its kin): null in a run whose env has
+  // a quality target ("target" in summary.json) that the run never met. Such a
+  // run counts as +inf (later than every run that met it), never dropped; its
+  // own table (time_to_target.csv, "reached k/n") and figure (target_<env>.svg).
+  bool censored = false;
 };
 const std::vector<ReportMetric>& report_metrics();
 

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <sstream>
 
@@ -28,8 +29,18 @@ const std::vector<ReportMetric>& report_metrics() {
       {"best.eval_return_mean", "return (best evaluation)", true, false},
       {"best.eval_discounted_return_mean", "discounted return (best evaluation)", true, false},
       {"best.final_distance", "final distance [m] (best evaluation)", false, false},
+      {"time_to_target_s", "time to target [s] (wall, evaluations included)", false, false, true},
+      {"steps_to_target", "env steps to target", false, false, true},
+      {"updates_to_target", "updates to target", false, false, true},
+      {"train_cost_to_target", "training collisions + violating steps to target", false, false, true},
   };
   return m;
+}
+
+const ReportMetric* find_report_metric(const std::string& key) {
+  for (const ReportMetric& m : report_metrics())
+    if (key == m.key) return &m;
+  return nullptr;
 }
 
 std::optional<double> metric_value(const nlohmann::json& summary, const std::string& key) {
@@ -46,12 +57,21 @@ std::optional<double> metric_value(const nlohmann::json& summary, const std::str
   return v;
 }
 
+std::optional<double> censored_value(const nlohmann::json& summary, const std::string& key) {
+  if (const auto v = metric_value(summary, key)) return v;
+  const bool has_target = summary.contains("target") && summary["target"].is_object();
+  if (has_target && summary.contains(key) && summary[key].is_null()) return std::numeric_limits<double>::infinity();
+  return std::nullopt;
+}
+
 std::vector<double> metric_values(const ReportData& d, const std::string& env, const std::string& algo,
                                   const std::string& key) {
+  const ReportMetric* m = find_report_metric(key);
+  const bool censored = m && m->censored;
   std::vector<double> out;
   for (const ReportRun& r : d.runs)
     if (r.finished && r.cell.env == env && r.cell.algo == algo)
-      if (const auto v = metric_value(r.summary, key)) out.push_back(*v);
+      if (const auto v = censored ? censored_value(r.summary, key) : metric_value(r.summary, key)) out.push_back(*v);
   return out;
 }
 
@@ -75,8 +95,14 @@ void read_curves(const std::string& path, ReportRun& r) {
   if (cs < 0 || cr < 0) return;
   while (std::getline(f, line)) {
     std::vector<double> v;
-    std::stringstream ls(line);
-    for (std::string c; std::getline(ls, c, ',');) v.push_back(std::strtod(c.c_str(), nullptr));  // "nan" reads as NaN
+    // Every cell, the empty last one included ("" reads as NaN: a target not met yet; "nan" too).
+    for (size_t at = 0;;) {
+      const size_t comma = line.find(',', at);
+      const std::string c = line.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+      v.push_back(c.empty() ? NAN : std::strtod(c.c_str(), nullptr));
+      if (comma == std::string::npos) break;
+      at = comma + 1;
+    }
     if (int(v.size()) != int(cols.size())) continue;
     r.steps.push_back(v[size_t(cs)]);
     r.eval_return.push_back(v[size_t(cr)]);

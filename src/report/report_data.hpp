@@ -31,12 +31,18 @@ struct ReportData {
 ReportData load_report_data(const ReportOptions& opts);
 // A metric's value in a run's summary ("best.<key>" looks in "best"); nullopt when absent or not finite.
 std::optional<double> metric_value(const nlohmann::json& summary, const std::string& key);
-// Values of the finished runs of (env, algo), in seed order.
+const ReportMetric* find_report_metric(const std::string& key);  // nullptr: not a report metric
+// A censored metric's value: metric_value, or +inf when the run's env has a
+// quality target and the key is null (never met); nullopt when not applicable.
+std::optional<double> censored_value(const nlohmann::json& summary, const std::string& key);
+// Values of the finished runs of (env, algo), in seed order (a censored
+// metric's runs that never met the target as +inf).
 std::vector<double> metric_values(const ReportData& d, const std::string& env, const std::string& algo,
                                   const std::string& key);
 
 // Figures, one file each (the colours: train/algorithms.hpp, algorithm_color).
-std::string boxplot_svg(const ReportData& d, const std::string& env);
+std::string boxplot_svg(const ReportData& d, const std::string& env);         // the boxplot metrics
+std::string target_boxplot_svg(const ReportData& d, const std::string& env);  // the censored metrics
 std::string curves_svg(const ReportData& d, const std::string& env);
 // cost_return_<env>.svg: final return against the final policy's episode
 // cost and against the run's training cost, a point per seed and the IQM of

@@ -54,41 +54,59 @@ void pad_range(double& lo, double& hi) {
   hi += pad;
 }
 
-std::string boxplot_svg(const ReportData& d, const std::string& env) {
+namespace {
+
+// One panel per metric, one box per algo, a point per seed. A censored
+// metric's +inf values (runs that never met the target) sit on a dashed
+// "not reached" line above the finite ones; quartiles and whiskers that are
+// +inf end there, and "k/n" under each box counts the runs that reached it.
+std::string box_grid(const ReportData& d, const std::string& env, const std::vector<const ReportMetric*>& panels,
+                     const std::string& title) {
   const double pw = 330, ph = 250, top = 55;
-  std::vector<const ReportMetric*> panels;
-  for (const ReportMetric& m : report_metrics())
-    if (m.boxplot) panels.push_back(&m);
   const int cols = 3, rows = int((panels.size() + cols - 1) / cols);
   std::string body;
   for (size_t p = 0; p < panels.size(); ++p) {
     const ReportMetric& m = *panels[p];
     double lo = INFINITY, hi = -INFINITY;
+    bool censored = false;
     std::vector<std::vector<double>> vals;
     for (const auto& a : d.algos) {
       vals.push_back(metric_values(d, env, a, m.key));
-      for (double v : vals.back()) lo = std::min(lo, v), hi = std::max(hi, v);
+      for (double v : vals.back()) {
+        if (std::isinf(v)) censored = true;
+        else lo = std::min(lo, v), hi = std::max(hi, v);
+      }
     }
     if (!std::isfinite(lo)) lo = 0, hi = 1;
     pad_range(lo, hi);
+    double never = hi;  // the "not reached" line
+    if (censored) {
+      never = hi + 0.1 * (hi - lo);
+      hi = never + 0.06 * (hi - lo);
+    }
+    const auto at = [&](double v) { return std::isinf(v) ? never : v; };
     const double na = double(d.algos.size());
     SvgCanvas c(pw, ph, 0, na, lo, hi, 42);
     c.y_axis("", 5);
     c.line(0, lo, na, lo, "#444");
     c.label(pw / 2, 18, std::string(m.label) + (m.higher_better ? "  (higher is better)" : "  (lower is better)"), 11,
             "middle");
+    if (censored) {
+      c.line(0, never, na, never, "#999", 1.0, "4 3");
+      c.text(na, never, "not reached ", 9, "end", "#777");
+    }
     for (size_t i = 0; i < vals.size(); ++i) {
       const std::vector<double>& v = vals[i];
       const double x = double(i) + 0.5;
       const std::string col = algorithm_color(d.algos[i]);
       // The algorithm's name under its box (two staggered rows: long names do not collide).
-      c.label(c.px(x), c.py(lo) + (i % 2 ? 24 : 13), d.algos[i], 8.5, "middle", "#222");
+      c.label(c.px(x), c.py(lo) + (i % 2 ? 23 : 12), d.algos[i], 8.5, "middle", "#222");
       if (v.empty()) {
         c.text(x, (lo + hi) / 2, "no runs", 9, "middle", "#999");
         continue;
       }
-      const double q1 = quantile(v, 0.25), med = quantile(v, 0.5), q3 = quantile(v, 0.75);
-      const double mn = *std::min_element(v.begin(), v.end()), mx = *std::max_element(v.begin(), v.end());
+      const double q1 = at(quantile(v, 0.25)), med = at(quantile(v, 0.5)), q3 = at(quantile(v, 0.75));
+      const double mn = at(*std::min_element(v.begin(), v.end())), mx = at(*std::max_element(v.begin(), v.end()));
       c.line(x, mn, x, q1, col, 1.2);
       c.line(x, q3, x, mx, col, 1.2);
       c.line(x - 0.15, mn, x + 0.15, mn, col, 1.2);
@@ -97,14 +115,36 @@ std::string boxplot_svg(const ReportData& d, const std::string& env) {
       c.line(x - 0.32, med, x + 0.32, med, col, 2.5);
       for (size_t k = 0; k < v.size(); ++k) {  // points: a fixed golden-ratio jitter, so figures are reproducible
         const double jitter = (std::fmod(double(k) * 0.6180339887, 1.0) - 0.5) * 0.4;
-        c.circle(x + jitter, v[k], 0.035, col, "none", 0.55);
+        c.circle(x + jitter, at(v[k]), 0.035, col, "none", 0.55);
+      }
+      if (m.censored) {
+        size_t reached = 0;
+        for (double y : v) reached += std::isfinite(y);
+        c.label(c.px(x), c.py(lo) + 34, std::to_string(reached) + "/" + std::to_string(v.size()) + " reached", 10,
+                "middle", "#444");  // below the plot area
       }
     }
     body += svg_placed(c, double(p % cols) * pw, top + double(p / cols) * ph);
   }
   std::vector<bool> dashed(d.algos.size(), false);
-  return svg_figure(cols * pw, top + rows * ph, env + ": final performance over seeds (box: quartiles, whiskers: range)",
-               d.algos, dashed, body);
+  return svg_figure(cols * pw, top + rows * ph, title, d.algos, dashed, body);
+}
+
+}  // namespace
+
+std::string boxplot_svg(const ReportData& d, const std::string& env) {
+  std::vector<const ReportMetric*> panels;
+  for (const ReportMetric& m : report_metrics())
+    if (m.boxplot) panels.push_back(&m);
+  return box_grid(d, env, panels, env + ": final performance over seeds (box: quartiles, whiskers: range)");
+}
+
+std::string target_boxplot_svg(const ReportData& d, const std::string& env) {
+  std::vector<const ReportMetric*> panels;
+  for (const ReportMetric& m : report_metrics())
+    if (m.censored) panels.push_back(&m);
+  return box_grid(d, env, panels,
+                  env + ": time to the quality target over seeds (runs that never reached it: on the dashed line)");
 }
 
 std::string curves_svg(const ReportData& d, const std::string& env) {

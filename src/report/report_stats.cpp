@@ -14,6 +14,9 @@ double quantile(std::vector<double> v, double q) {
   const double h = q * double(v.size() - 1);
   const size_t lo = size_t(std::floor(h));
   const size_t hi = std::min(lo + 1, v.size() - 1);
+  // Censored values are +inf: an order statistic itself, or between two equal
+  // ones, is returned as it is (inf - inf would make NaN).
+  if (h == double(lo) || v[hi] == v[lo]) return v[lo];
   return v[lo] + (h - double(lo)) * (v[hi] - v[lo]);
 }
 
@@ -66,8 +69,9 @@ double probability_of_improvement(const std::vector<double>& x, const std::vecto
   double s = 0;
   for (double a : x)
     for (double b : y) {
-      const double d = higher_better ? a - b : b - a;
-      s += d > 0 ? 1.0 : d == 0 ? 0.5 : 0.0;
+      // Compared, not subtracted: two censored (+inf) values are equal.
+      const bool better = higher_better ? a > b : a < b;
+      s += better ? 1.0 : a == b ? 0.5 : 0.0;
     }
   return s / double(x.size() * y.size());
 }

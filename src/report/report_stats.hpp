@@ -12,6 +12,11 @@
 //              reproducible bit for bit
 //   P(X > Y)   probability of improvement, Mann-Whitney form: over all pairs
 //              (x_i, y_j), 1 when x_i is better, 1/2 when equal, 0 else.
+// Censored values (a run that never met its quality target) enter as +inf:
+// they sort last, quantiles and the IQM are +inf when they reach into the
+// statistic (the IQM is finite while at most floor(n / 4) runs are censored),
+// and two of them are equal in P(X > Y). Nothing is dropped, nothing is
+// imputed: an infinite bound reads "not reached within the runs' budgets".
 #pragma once
 #include <cstdint>
 #include <string>

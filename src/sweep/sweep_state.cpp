@@ -47,7 +47,9 @@ std::string run_files_state(const std::string& sweep_dir, const SweepCell& c) {
   if (fs::exists(run / "summary.json")) {
     try {
       const nlohmann::json s = read_json_file((run / "summary.json").string(), "summary file");
-      if (!c.learns || s.value("env_steps", int64_t{0}) >= c.steps) return "done";
+      // A run that stopped at its quality target (train.stop_at_target) is done before its budget.
+      const nlohmann::json stopped = s.value("stopped_at_target", nlohmann::json(false));
+      if (!c.learns || s.value("env_steps", int64_t{0}) >= c.steps || stopped == true) return "done";
     } catch (const std::exception&) {
       // unreadable: not done; the checkpoint decides
     }

@@ -7,7 +7,8 @@
 //   DIR/state/<cell>.json    the last attempt: state, exit code, host, pid
 //   DIR/state/<cell>.lock    flock-ed by the process that runs the cell
 //   DIR/sweep.json           every cell's state, rewritten as they change
-// A cell is "done" when its summary.json covers the spec's steps, "partial"
+// A cell is "done" when its summary.json covers the spec's steps (or says
+// the run stopped at its quality target), "partial"
 // when it holds a checkpoint to resume from, "running" while some process
 // holds its lock, "failed" when the last attempt exited non-zero (with the
 // log path), "interrupted" when an attempt died without saying so (kill -9,

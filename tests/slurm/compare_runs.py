@@ -3,7 +3,8 @@
 
 The wall-clock fields are the only thing allowed to differ between two sweeps
 of the same spec (docs/sweeps.md): wall_s in summary.json and checkpoint.json,
-the wall_s column of progress.csv, and checkpoint.bin (its counters hold the
+time_to_target_s, eval_wall_s and eval_share in summary.json, the wall_s and
+time_to_target_s columns of progress.csv, and checkpoint.bin (its counters hold the
 wall time; checkpoint.json holds its agent hash). Everything else, policies
 included, must be the same bytes. --except-host also sets aside the "host"
 record of config.json and summary.json (where and how a run ran: hostname,
@@ -24,7 +25,8 @@ def comparable(path):
         data = f.read()
     if name in ("summary.json", "checkpoint.json"):
         j = json.loads(data)
-        j.pop("wall_s", None)
+        for k in ("wall_s", "time_to_target_s", "eval_wall_s", "eval_share"):
+            j.pop(k, None)
         if EXCEPT_HOST and name == "summary.json":
             j.pop("host", None)
         return json.dumps(j, sort_keys=True).encode()
@@ -36,7 +38,8 @@ def comparable(path):
         rows = [line.split(",") for line in data.decode().splitlines()]
         if not rows or len(rows[0]) < 3 or rows[0][2] != "wall_s":
             raise SystemExit(f"{path}: the third column is not wall_s")
-        return "\n".join(",".join(r[:2] + r[3:]) for r in rows).encode()
+        wall = {k for k, c in enumerate(rows[0]) if c in ("wall_s", "time_to_target_s")}
+        return "\n".join(",".join(c for k, c in enumerate(r) if k not in wall) for r in rows).encode()
     return data
 
 
