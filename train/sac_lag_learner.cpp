@@ -20,10 +20,13 @@ SacLagLearner::SacLagLearner(const LearnerContext& ctx, const SacConfig& sac, co
 }
 
 void SacLagLearner::observe(const float* obs, const double* actions, const EnvBuffers& b) {
+  // Episodes of the untrained actor (before SAC's warm-up ends) say nothing
+  // about the policy the multiplier weighs: they do not move it.
+  const bool actor_learns = sac_.replay_size() > sac_.config().warmup;
   for (int i = 0; i < N_; ++i) {
     episode_cost_[size_t(i)] += b.cost[size_t(i)];
     if (!b.done(i)) continue;
-    lag_.update(episode_cost_[size_t(i)]);
+    if (actor_learns) lag_.update(episode_cost_[size_t(i)]);
     window_cost_ += episode_cost_[size_t(i)];
     ++window_episodes_;
     episode_cost_[size_t(i)] = 0.0;

@@ -5,8 +5,10 @@
 // (EnvBuffers::cost summed over the episode) against the budget cost_limit.
 // Config sections: "sac" (the SAC settings, as for `sac`) and "lagrangian".
 // Per batch step, in this order: every episode that ended updates the
-// multiplier (env index order), then SAC stores the transitions and runs its
-// updates with the new multiplier.
+// multiplier (env index order; only once the replay holds more than SAC's
+// warm-up, when the actor learns: the untrained actor's episodes do not
+// count), then SAC stores the transitions and runs its updates with the new
+// multiplier.
 //
 // progress.csv adds to SAC's columns cost_critic_loss, cost_q_mean,
 // lagrange_multiplier (at the row) and train_episode_cost (the mean cost of

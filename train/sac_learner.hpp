@@ -67,6 +67,7 @@ class SacLearner : public Learner {
   uint64_t state_hash() const override { return sac_.state_hash(); }  // networks, moments, temperature, RNG
 
   const Sac& agent() const { return sac_; }
+  int64_t replay_size() const { return replay_.size(); }
   // The multiplier of the cost critic's term in the actor loss (cost critic only).
   void set_cost_weight(double w) { cost_weight_ = w; }
   const SacConfig& config() const { return cfg_; }
