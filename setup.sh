@@ -5,10 +5,14 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-# The last four build and test the Python module (python/); python3-torch is
-# optional (only python/examples/sac_torch.py uses it) and not installed here.
+# pybind11-dev .. python3-pytest build and test the Python module (python/);
+# python3-pip, python3-setuptools, python3-wheel and python3-venv are what
+# `pip install .` uses offline (setup.py drives CMake; the README's venv
+# command; ctest's python_pip test runs it). python3-torch is optional (only
+# python/examples/sac_torch.py uses it) and not installed here.
 PACKAGES=(build-essential cmake libeigen3-dev libtbb-dev libbox2d-dev nlohmann-json3-dev catch2 libcli11-dev
-          pybind11-dev python3-dev python3-numpy python3-pytest)
+          pybind11-dev python3-dev python3-numpy python3-pytest
+          python3-pip python3-setuptools python3-wheel python3-venv)
 # (`./setup.sh --packages` prints the list, for CI's single apt transaction.)
 if [ "${1:-}" = "--packages" ]; then echo "${PACKAGES[*]}"; exit 0; fi
 missing=()
@@ -48,3 +52,10 @@ awk -F, 'NR > 1 && $1 == "table" { v[$2, $3] = $10 }
     for (i = 1; i <= n; ++i)
       printf "%-11s %17g %19g %19.3f\n", a[i], v[a[i], "train_collisions"], v[a[i], "train_terminations"], v[a[i], "final_distance"]
   }' "$sweep/report/summary.csv"
+cat <<'EOF'
+One seed per algorithm (n = 1): the table says what happened in these two runs
+(whether training touched the table, how close the final policy got), not how
+often it would happen again, nor whether the distance gap is larger than the
+spread between seeds; the report gives no interval or P(improvement) from one
+seed. With 3 seeds: ./build/atacom sweep configs/sweeps/quick.json --out DIR
+EOF

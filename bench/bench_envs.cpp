@@ -10,6 +10,10 @@
 // The policy is uniform random alpha (pre-drawn, cycled), so episodes end
 // and autoreset exactly as in training.
 //
+// --sdf analytic|learned switches the distance fields of the arm envs
+// (envs/arm/arm_learned_sdf.hpp; "default": each env's own, learned on hri);
+// lines carry "sdf".
+//
 // ATACOM path: the registry's SafeEnv (constraint model + projection per
 // block, then the inner step). split: shares of thread time (wall time x
 // threads in use) from the env's profiling hooks, which sum seconds over
@@ -27,6 +31,7 @@
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 #include "bench/bench_common.hpp"
+#include "envs/arm/arm_learned_sdf.hpp"
 
 using namespace atacom;
 
@@ -40,8 +45,9 @@ struct Run {
   std::vector<std::vector<double>> alpha;
   int next = 0;
 
-  Run(const std::string& name, int N, bool atacom) {
-    env = make_env({name, N, atacom ? SafetyLayer::Atacom : SafetyLayer::None, nlohmann::json::object()});
+  Run(const std::string& name, int N, bool atacom, const std::string& sdf) {
+    const nlohmann::json cfg = sdf == "default" ? nlohmann::json::object() : sdf_flag_override(name, sdf);
+    env = make_env({name, N, atacom ? SafetyLayer::Atacom : SafetyLayer::None, cfg});
     env->seed(1);
     const int m = env->spec().act_dim;
     Rng rng(2, 0);
@@ -73,7 +79,7 @@ std::vector<int> parse_list(const std::string& s) {
 int main(int argc, char** argv) {
   CLI::App app{"bench_envs: batched env steps per second with and without ATACOM"};
   std::vector<std::string> envs;
-  std::string Ns = "1,256,4096", threads_s = "1,2", atacom_s = "both";
+  std::string Ns = "1,256,4096", threads_s = "1,2", atacom_s = "both", sdf = "default";
   int repeats = 5;
   double round_s = 0.2;
   app.add_option("--env", envs, "env names (default: every registered env with a constraint model)");
@@ -82,6 +88,8 @@ int main(int argc, char** argv) {
   app.add_option("--atacom", atacom_s, "on, off or both")->check(CLI::IsMember({"on", "off", "both"}));
   app.add_option("--repeats", repeats, "timing rounds (best is kept)");
   app.add_option("--round-seconds", round_s, "minimum seconds per timing round");
+  app.add_option("--sdf", sdf, "distance fields: default (each env's own), analytic or learned")
+      ->check(CLI::IsMember({"default", "analytic", "learned"}));
   CLI11_PARSE(app, argc, argv);
   if (envs.empty())
     for (const EnvEntry& e : env_entries())
@@ -96,7 +104,7 @@ int main(int argc, char** argv) {
         for (int threads : parse_list(threads_s))
           for (int N : parse_list(Ns)) {
             set_num_threads(threads);
-            Run run(name, N, atacom);
+            Run run(name, N, atacom, sdf);
             const double sec = bench::best_seconds_per_call([&] { run.step(); }, repeats, round_s);
             // Time split from a separate profiled pass (profiling adds clock reads).
             const std::vector<std::string> sections = run.env->profile_sections();
@@ -123,6 +131,7 @@ int main(int argc, char** argv) {
             bench::emit({{"bench", "env_step"},
                          {"env", name},
                          {"atacom", atacom},
+                         {"sdf", sdf},
                          {"N", N},
                          {"threads", threads},
                          {"per_s", N / sec},

@@ -21,8 +21,10 @@ const std::vector<EnvEntry>& env_entries() {
        make_shelf_env, make_shelf_attractor},
       {"nav", "differential-drive TIAGo to a goal among walls and a moving Fetch (Box2D)", true,
        &nav_default_config_json, &make_nav_env, make_nav_attractor},
-      {"hri", "HRI-Sim: TIAGo++ arm carrying a cup upright past a moving human (44 constraints)", true,
+      {"hri", "HRI-Sim: TIAGo++ arm carrying a cup past a moving human, spills counted (43 constraints)", true,
        hri_env_default_config, make_hri_env, make_hri_attractor},
+      {"hri-upright", "HRI-Sim plus a cup-upright constraint row (ours; 44 constraints)", true,
+       hri_upright_env_default_config, make_hri_env, make_hri_attractor},
       pendulum_env_entry(),
   };
   return entries;
@@ -50,7 +52,11 @@ nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::j
   nlohmann::json out = base;
   for (auto it = overrides.begin(); it != overrides.end(); ++it) {
     const std::string key = path.empty() ? it.key() : path + "." + it.key();
-    if (!base.contains(it.key())) throw std::invalid_argument("unknown config key '" + printable_text(key) + "'");
+    if (!base.contains(it.key())) {
+      std::vector<std::string> valid;
+      for (auto b = base.begin(); b != base.end(); ++b) valid.push_back(b.key());
+      throw std::invalid_argument(unknown_key_message(key, path.empty() ? "config" : path, valid));
+    }
     const auto& b = base[it.key()];
     const auto& v = it.value();
     if (b.is_object()) {
@@ -70,7 +76,9 @@ nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::j
 }
 
 nlohmann::json resolve_env_config(const std::string& name, const nlohmann::json& overrides) {
-  return merge_config_strict(env_entry(name).default_config(), overrides, "env");
+  // Runs recorded before issue 30 named today's hri-upright "hri" (envs/arm/arm_registry.cpp).
+  const nlohmann::json& o = name == "hri" ? hri_upgrade_pre_issue30_config(overrides) : overrides;
+  return merge_config_strict(env_entry(name).default_config(), o, "env");
 }
 
 std::unique_ptr<Policy> make_attractor_policy(const std::string& env, const nlohmann::json& resolved_env_config) {

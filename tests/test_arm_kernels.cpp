@@ -55,7 +55,10 @@ TEST_CASE("arm kernels: a step of an unaligned range equals the scalar reference
   for (ArmTask task : {ArmTask::Table, ArmTask::Hri}) {
     INFO(arm_task_name(task));
     const int N = 37, begin = 5, end = 27;  // neither a multiple of 8 lanes nor of the 256-env block
-    ArmEnv env(default_arm_env_config(task), N);
+    ArmEnvConfig cfg = default_arm_env_config(task);
+    // HRI: the analytic fields, which the scalar reference evaluates (the learned human has its own tests).
+    if (task == ArmTask::Hri) cfg.sdf = {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}};
+    ArmEnv env(cfg, N);
     env.seed(11);
     Rng rng(12, 0);
     for (int s = 0; s < 5; ++s) env.step(actions(rng, N).data());
@@ -107,14 +110,20 @@ TEST_CASE("arm kernels: a step of an unaligned range equals the scalar reference
 }
 
 TEST_CASE("arm kernels: the human is a moving row group, the static groups are not", "[arm_kernels]") {
-  const ArmRowLayout table = ArmRowLayout::compose(false), hri = ArmRowLayout::compose(true);
+  const ArmRowLayout table = ArmRowLayout::compose(false), hri = ArmRowLayout::compose(true),
+                     upright = ArmRowLayout::compose(true, true);
   CHECK(table.k == kArmRows);
   CHECK(table.moving_groups() == 0);
-  CHECK(hri.k == kArmMaxRows);
-  CHECK(hri.moving_groups() == 1);
-  for (const ArmRowSpan& g : hri.groups) {
-    CHECK(g.moving == (g.kind == ArmRowKind::Human));
-    CHECK(g.state == (g.moving ? 0 : -1));
+  CHECK(hri.k == kArmRows + kArmPoi);
+  CHECK(!hri.has(ArmRowKind::Upright));
+  CHECK(upright.k == kArmMaxRows);
+  CHECK(upright.has(ArmRowKind::Upright));
+  for (const ArmRowLayout* l : {&hri, &upright}) {
+    CHECK(l->moving_groups() == 1);
+    for (const ArmRowSpan& g : l->groups) {
+      CHECK(g.moving == (g.kind == ArmRowKind::Human));
+      CHECK(g.state == (g.moving ? 0 : -1));
+    }
   }
   // Two envs built from one model share it (no second goal library or field).
   auto model = make_arm_model(default_arm_env_config(ArmTask::Table));

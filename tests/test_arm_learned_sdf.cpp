@@ -13,21 +13,26 @@
 using namespace atacom;
 
 namespace {
+// The env's static object's field as given, the others analytic (hri: its table, key "table").
 ArmEnvConfig config_with(ArmTask task, const std::string& spec) {
   ArmEnvConfig c = default_arm_env_config(task);
-  c.sdf = {{arm_task_name(task), spec}};
+  if (task == ArmTask::Hri) c.sdf = {{"table", spec}, {"human", "analytic"}, {"tiago", "analytic"}};
+  else c.sdf = {{arm_task_name(task), spec}};
   return c;
 }
 }  // namespace
 
 TEST_CASE("learned obstacle rows agree with the analytic rows near the object", "[arm_env][redsdf]") {
-  for (ArmTask task : {ArmTask::Table, ArmTask::Shelf}) {
+  for (ArmTask task : {ArmTask::Table, ArmTask::Shelf, ArmTask::Hri}) {
     const int N = 64;
     ArmEnv an(config_with(task, "analytic"), N), le(config_with(task, "learned"), N);
     an.seed(5), le.seed(5);
     an.reset(), le.reset();
     // The learned env in the analytic env's start states (its own starts differ: its thresholds are larger).
-    for (int e = 0; e < N; ++e) le.set_state(e, &an.q()[size_t(e) * kArmJoints], &an.goal()[size_t(e) * 3]);
+    for (int e = 0; e < N; ++e) {
+      if (task == ArmTask::Hri) le.set_human_time(e, an.human_time()[size_t(e)]);
+      le.set_state(e, &an.q()[size_t(e) * kArmJoints], &an.goal()[size_t(e) * 3]);
+    }
     ProjectorBatch pa(an.projector_model(), N), pl(le.projector_model(), N);
     an.constraint_model(pa, 0, N);
     le.constraint_model(pl, 0, N);
@@ -48,7 +53,7 @@ TEST_CASE("learned obstacle rows agree with the analytic rows near the object", 
         worst = std::max(worst, std::abs(dl - da));
       }
     INFO(arm_task_name(task) << ": " << near << " PoIs within 0.3 m, worst |d_learned - d_analytic| " << worst);
-    CHECK(near > 20);
+    CHECK(near > (task == ArmTask::Hri ? 10 : 20));  // HRI's starts keep the cup above a smaller table
     CHECK(worst < 0.03 + blend_err);
   }
 }
@@ -61,6 +66,12 @@ TEST_CASE("bad learned-field settings fail at construction with the key named", 
   CHECK_THROWS_WITH(ArmEnv(config_with(ArmTask::Table, "learned:/nonexistent/sdf"), 1), Catch::Contains("cannot be opened"));
   CHECK_THROWS_WITH(ArmEnv(config_with(ArmTask::Table, "learned:data/sdf/shelf"), 1),
                     Catch::Contains("holds object 'shelf', expected 'table'"));
+  // HRI's table is a field of its own (data/sdf/hri_table) under the key "table".
+  CHECK_THROWS_WITH(ArmEnv(config_with(ArmTask::Hri, "learned:data/sdf/table"), 1),
+                    Catch::Contains("holds object 'table', expected 'hri_table'"));
+  ArmEnvConfig hri = default_arm_env_config(ArmTask::Hri);
+  hri.sdf["shelf"] = "learned";
+  CHECK_THROWS_WITH(ArmEnv(hri, 1), Catch::Contains("env.sdf.shelf"));
   CHECK(sdf_flag_override("table", "learned") == nlohmann::json{{"sdf", {{"table", "learned"}, {"tiago", "learned"}}}});
   CHECK(sdf_flag_override("nav", "analytic").empty());
   CHECK_THROWS_WITH(sdf_flag_override("nav", "learned"), Catch::Contains("no field with a shipped learned model"));

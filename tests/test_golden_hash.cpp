@@ -26,6 +26,7 @@
 // hashes it found; it has no constant to compare against and says so.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -82,9 +83,26 @@ const Golden kGolden[] = {
     {"shelf", SafetyLayer::Atacom, 0x5d2e8814c4401532ull, 0x382365a8cb8bfdf9ull},
     {"nav", SafetyLayer::None, 0x9b09f56ba46313c5ull, 0x01893b328f8f0be9ull},
     {"nav", SafetyLayer::Atacom, 0x3d3ac1a8bd25644aull, 0x9bc3f3b96514cb8cull},
-    // hri: native recorded; portable 0 = not recorded yet (checked for thread invariance only).
-    {"hri", SafetyLayer::None, 0, 0x82d7cffe2b8973b0ull},
-    {"hri", SafetyLayer::Atacom, 0, 0x3f034850a977e925ull},
+    // hri, hri-upright: native recorded; portable 0 = not recorded yet (checked for thread invariance only).
+    // New with issue 30 (hri became the paper's task: no upright row, the human at real speed, learned
+    // fields, upright starts, spills at 25 and 15 deg); hri-upright is new.
+    {"hri", SafetyLayer::None, 0, 0x1b95459ff78f05e6ull},
+    {"hri", SafetyLayer::Atacom, 0, 0x677aceba63a73d16ull},
+    {"hri-upright", SafetyLayer::None, 0, 0x2554e86418d5e0d7ull},
+    {"hri-upright", SafetyLayer::Atacom, 0, 0x162c82a0d4cfb297ull},
+};
+
+// The env "hri" was before issue 30 (commit 1fe7f3d): its recorded native
+// constants, reproduced by hri-upright with the keys that describe it (and,
+// through the registry's upgrade of pre-issue-30 run configs, by "hri" given
+// such a config), hashing every info column but the new spill_15.
+struct PreIssue30 {
+  SafetyLayer safety;
+  uint64_t native;
+};
+const PreIssue30 kPreIssue30[] = {
+    {SafetyLayer::None, 0x82d7cffe2b8973b0ull},
+    {SafetyLayer::Atacom, 0x3f034850a977e925ull},
 };
 
 template <class T>
@@ -92,7 +110,8 @@ uint64_t mix(uint64_t h, const std::vector<T>& v) {
   return bin::fnv1a(v.data(), v.size() * sizeof(T), h);
 }
 
-uint64_t buffers_hash(uint64_t h, const EnvBuffers& b) {
+// drop_info: an info column left out of the hash (-1: none).
+uint64_t buffers_hash(uint64_t h, const EnvBuffers& b, int drop_info = -1) {
   h = mix(h, b.obs);
   h = mix(h, b.final_obs);
   h = mix(h, b.reward);
@@ -100,7 +119,15 @@ uint64_t buffers_hash(uint64_t h, const EnvBuffers& b) {
   h = mix(h, b.terminated);
   h = mix(h, b.truncated);
   h = mix(h, b.constraints);
-  h = mix(h, b.info);
+  if (drop_info < 0) {
+    h = mix(h, b.info);
+  } else {
+    const size_t ni = b.info.size() / size_t(b.N);
+    std::vector<float> kept;
+    for (size_t i = 0; i < b.info.size(); ++i)
+      if (i % ni != size_t(drop_info)) kept.push_back(b.info[i]);
+    h = mix(h, kept);
+  }
   h = mix(h, b.episode_return);
   h = mix(h, b.episode_length);
   return h;
@@ -112,19 +139,24 @@ struct GoldenRun {
   int64_t terminated = 0, truncated = 0;  // episode ends seen (autoreset is covered)
 };
 
-GoldenRun golden_run(const std::string& env_name, SafetyLayer safety) {
-  std::unique_ptr<BatchEnv> env = make_env({env_name, kEnvs, safety, {{"horizon", kHorizon}}});
+GoldenRun golden_run(const std::string& env_name, SafetyLayer safety, nlohmann::json overrides = nlohmann::json::object(),
+                     const std::string& drop_info = "") {
+  overrides["horizon"] = kHorizon;
+  std::unique_ptr<BatchEnv> env = make_env({env_name, kEnvs, safety, overrides});
   env->seed(2024);
   const int m = env->spec().act_dim;
+  const auto& names = env->spec().info_names;
+  const int drop = drop_info.empty() ? -1 : int(std::find(names.begin(), names.end(), drop_info) - names.begin());
+  REQUIRE(drop < int(names.size()));
   std::vector<double> a(static_cast<size_t>(kEnvs) * m);
   Rng rng(7, 0);
   GoldenRun r;
-  r.hash = buffers_hash(bin::fnv1a(nullptr, 0), env->buffers());
+  r.hash = buffers_hash(bin::fnv1a(nullptr, 0), env->buffers(), drop);
   for (int s = 0; s < kSteps; ++s) {
     for (double& x : a) x = rng.uniform(-1.2, 1.2);
     env->step(a.data());
     const EnvBuffers& b = env->buffers();
-    r.hash = buffers_hash(r.hash, b);
+    r.hash = buffers_hash(r.hash, b, drop);
     for (int i = 0; i < kEnvs; ++i) {
       r.terminated += b.terminated[i];
       r.truncated += b.truncated[i];
@@ -171,5 +203,32 @@ TEST_CASE("golden hashes: fixed action sequences give committed bits for 1, 2 an
     }
     INFO("expected " << hex(want));
     CHECK(h[0] == want);
+  }
+}
+
+TEST_CASE("golden hashes: hri-upright with the pre-issue-30 keys is the hri env of before issue 30, bit for bit",
+          "[golden][hri]") {
+  INFO("build: " << kBuildName);
+  const double pi = 3.14159265358979323846;
+  const nlohmann::json analytic = {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}};
+  const nlohmann::json keys = {{"hri", {{"frames_per_step", 0.5}, {"spill_angle", 0.6981}, {"start_tilt", pi}}},
+                               {"sdf", analytic}};
+  // A run config of that time: the whole resolved hri section, without the keys issue 30 added.
+  nlohmann::json old = nlohmann::json::parse(env_entry("hri").default_config().dump());
+  for (const char* k : {"upright_row", "spill_angle_strict", "start_tilt"}) old["hri"].erase(k);
+  old["hri"]["frames_per_step"] = 0.5;
+  old["hri"]["spill_angle"] = 0.6981;
+  old["sdf"] = {{"human", "analytic"}, {"tiago", "analytic"}};
+  for (const PreIssue30& g : kPreIssue30) {
+    const GoldenRun upright = golden_run("hri-upright", g.safety, keys, "spill_15");
+    const GoldenRun upgraded = golden_run("hri", g.safety, old, "spill_15");
+    INFO((g.safety == SafetyLayer::Atacom ? "atacom" : "none") << ": hri-upright " << hex(upright.hash)
+                                                               << ", hri with an old config " << hex(upgraded.hash));
+    CHECK(upright.hash == upgraded.hash);
+    if (kBuild != Build::NativeAvx512Fma) {
+      WARN("pre-issue-30 constants are recorded for the native build only (" << kBuildName << ")");
+      continue;
+    }
+    CHECK(upright.hash == g.native);
   }
 }

@@ -15,6 +15,7 @@
 #include "atacom/rng.hpp"
 #include "envs/arm/human_model.hpp"
 #include "envs/arm/human_motion.hpp"
+#include "envs/arm/human_motion_stats.hpp"
 #include "kernels/human_kernels.hpp"
 #include "envs/arm/arm_scene.hpp"
 #include "envs/arm/tiago_model.hpp"
@@ -290,4 +291,42 @@ TEST_CASE("human motion files: corrupt or foreign files are rejected with a clea
   CHECK_THROWS_WITH(load_human_motion(dir + "/m.bin", dir + "/m.json"), Catch::Contains("float32"));
   CHECK_THROWS_AS(load_human_motion(dir + "/none.bin", dir + "/none.json"), std::runtime_error);
   std::filesystem::remove_all(dir);
+}
+
+// The speed statistics of docs/human.md: per-frame speeds equal central
+// differences of the interpolated positions, and the summaries stay inside
+// the generator's bounds (walks peak in [0.3, 1.4] m/s, no point above 3.5).
+TEST_CASE("human motion speed statistics: frame speeds are the positions' derivatives, within the bounds", "[human]") {
+  const HumanMotionLibrary& lib = library();
+  const HumanModel& m = model();
+  const int pelvis = m.joint_index("pelvis"), tips[2] = {m.joint_index("fingertip_l"), m.joint_index("fingertip_r")},
+            wrists[2] = {m.joint_index("wrist_l"), m.joint_index("wrist_r")};
+  const double h = 1e-3;  // frames
+  auto at = [&](double t) {
+    double pose[kHumanPoseDim];
+    lib.sample(t, pose, nullptr);
+    return human_fk_reference(m, pose);
+  };
+  for (int f = 500; f < lib.num_frames - 1; f += 997) {
+    const HumanFkResult a = at(f - h), b = at(f + h);
+    auto speed = [&](int j) { return (b.p[size_t(j)] - a.p[size_t(j)]).norm() / (2 * h / lib.fps()); };
+    const HumanFrameSpeeds v = human_frame_speeds(lib, m, f);
+    CHECK(v.pelvis_horizontal == Approx((b.p[size_t(pelvis)] - a.p[size_t(pelvis)]).head<2>().norm() / (2 * h / lib.fps()))
+                                     .margin(1e-5));
+    CHECK(v.hand == Approx(std::max(speed(tips[0]), speed(tips[1]))).margin(1e-5));
+    CHECK(v.wrist == Approx(std::max(speed(wrists[0]), speed(wrists[1]))).margin(1e-5));
+  }
+  const nlohmann::json s = human_motion_speed_stats(lib, m);
+  const HumanMotionBounds bounds = human_motion_bounds();
+  CHECK(s["pelvis_horizontal"]["walk"]["segments"].get<int>() > 0);
+  CHECK(s["pelvis_horizontal"]["walk"]["peak_max"].get<double>() <= bounds.walk_speed_max);
+  CHECK(s["pelvis_horizontal"]["walk"]["peak_median"].get<double>() >= bounds.walk_speed_min);
+  CHECK(s["pelvis_horizontal"]["reach"]["max"].get<double>() < 1e-6);  // reaching stands still
+  for (const char* q : {"wrist", "hand"}) {
+    CHECK(s[q]["all"]["max"].get<double>() <= bounds.point_speed);
+    CHECK(s[q]["all"]["p50"].get<double>() <= s[q]["all"]["p90"].get<double>());
+    CHECK(s[q]["all"]["p90"].get<double>() <= s[q]["all"]["p99"].get<double>());
+    CHECK(s[q]["all"]["p99"].get<double>() <= s[q]["all"]["max"].get<double>());
+  }
+  CHECK(s["hand"]["reach"]["peak_median"].get<double>() > 0.3);  // the reaches move the hand
 }

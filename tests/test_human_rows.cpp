@@ -296,7 +296,7 @@ TEST_CASE("human rows: J_x xdot is the time derivative of the rows along replaye
   // robot is placed 1 m closer along x so that the human comes within reach.
   HumanReplayConfig replay;
   replay.split = HumanSplit::Test;
-  const double dt = 1.0 / 30.0, h = 1e-3;  // h in env seconds
+  const double dt = 1.0 / 30.0, h = 5e-4;  // h in env seconds (0.015 frames at real time)
   int lo = 0, hi = 0;
   lib.split_range(HumanSplit::Test, lo, hi);
   std::vector<double> ts;

@@ -45,8 +45,10 @@ bool close(double a, double b, double abs_tol, double rel) {
   return std::abs(a - b) <= abs_tol + rel * std::max(std::abs(a), std::abs(b));
 }
 
+// The body's field as given, every other field analytic (hri's default is learned).
 ArmEnvConfig body_config(ArmTask task, const std::string& spec) {
   ArmEnvConfig c = default_arm_env_config(task);
+  for (auto& [key, value] : c.sdf) value = "analytic";
   c.sdf["tiago"] = spec;
   return c;
 }
@@ -234,7 +236,8 @@ TEST_CASE("bad learned body settings fail at construction with the key or file n
   std::filesystem::remove_all(base);
   // The flag switches the body with the env's own field on every arm env.
   CHECK(sdf_flag_override("shelf", "learned") == nlohmann::json{{"sdf", {{"shelf", "learned"}, {"tiago", "learned"}}}});
-  CHECK(sdf_flag_override("hri", "analytic") == nlohmann::json{{"sdf", {{"human", "analytic"}, {"tiago", "analytic"}}}});
+  CHECK(sdf_flag_override("hri", "analytic") ==
+        nlohmann::json{{"sdf", {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}}}});
 }
 
 TEST_CASE("sdf-paths on the body field: every point counted, the band's over-estimate within the body margin", "[redsdf][arm_env]") {

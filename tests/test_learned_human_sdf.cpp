@@ -180,7 +180,9 @@ TEST_CASE("human SDF data: labels are the env rows' smooth min, surface points s
 
 TEST_CASE("hri with the shipped learned human: rows agree with the analytic rows, bad settings name the key", "[redsdf][hri]") {
   const int N = 64;
-  ArmEnvConfig ca = default_arm_env_config(ArmTask::Hri), cl = ca;
+  ArmEnvConfig ca = default_arm_env_config(ArmTask::Hri);
+  ca.sdf = {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}};
+  ArmEnvConfig cl = ca;
   cl.sdf = {{"human", "learned"}};
   ArmEnv an(ca, N), le(cl, N);
   an.seed(4), le.seed(4);
@@ -212,7 +214,8 @@ TEST_CASE("hri with the shipped learned human: rows agree with the analytic rows
   CHECK(near > 10);
   CHECK(worst < 0.06);
   // Settings.
-  CHECK(sdf_flag_override("hri", "learned") == nlohmann::json{{"sdf", {{"human", "learned"}, {"tiago", "learned"}}}});
+  CHECK(sdf_flag_override("hri", "learned") ==
+        nlohmann::json{{"sdf", {{"human", "learned"}, {"table", "learned"}, {"tiago", "learned"}}}});
   ArmEnvConfig bad = ca;
   bad.sdf = {{"human", "learned:data/sdf/table"}};
   CHECK_THROWS_WITH(ArmEnv(bad, 1), Catch::Contains("holds object 'table', expected 'human'"));

@@ -4,6 +4,8 @@
 // terminal event, and the CLI writes it. With chromium on the machine
 // ([slow]) the page's script runs and fills in the status line.
 #include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
 
 #include <cstdio>
 #include <cstdlib>
@@ -208,7 +210,7 @@ TEST_CASE("render: the page's script runs in headless chromium", "[render][slow]
   const std::string cmd = browser +
                           " --headless --no-sandbox --disable-gpu --disable-background-networking "
                           "--disable-component-update --disable-sync --no-first-run --user-data-dir=" +
-                          (dir / "profile").string() + " --dump-dom 'file://" + page + "?step=7' 2>/dev/null";
+                          (dir / "profile").string() + " --dump-dom 'file://" + page + "?step=7&play=0' 2>/dev/null";
   FILE* p = popen(cmd.c_str(), "r");
   REQUIRE(p);
   char buf[65536];
@@ -221,4 +223,32 @@ TEST_CASE("render: the page's script runs in headless chromium", "[render][slow]
   CHECK(std::regex_search(dom, std::regex("step +7 / " + std::to_string(r.steps))));
   CHECK(count(dom, "<svg") == 4);
   CHECK(count(dom, "class=\"link\"") >= 12);  // the link capsules in both views
+}
+
+TEST_CASE("render: the constraint plot's range fits the data, boundary included", "[render]") {
+  // nav's distances reach metres below zero (before: clipped at -0.5), an arm's max sits near 0
+  for (const std::vector<std::vector<double>>& rows :
+       {std::vector<std::vector<double>>{{-2.7, -1.9, -0.4}, {-0.02, -0.001, -0.003}},
+        std::vector<std::vector<double>>{{-0.3, -0.2}, {-0.1, NAN}}, std::vector<std::vector<double>>{{0.04, 0.01}}}) {
+    const auto [lo, hi] = constraint_plot_range(rows);
+    double mn = 0, mx = 0;
+    for (const auto& r : rows)
+      for (double x : r)
+        if (std::isfinite(x)) mn = std::min(mn, x), mx = std::max(mx, x);
+    CHECK(lo <= mn);
+    CHECK(hi >= mx);
+    CHECK(lo < 0.0);
+    CHECK(hi > 0.0);
+    CHECK(hi - lo <= 2.5 * (mx - mn) + 0.01);  // fits: not a fixed wide range
+  }
+}
+
+TEST_CASE("render: the page plays on open unless ?play=0", "[render]") {
+  RenderConfig c;
+  c.env = "nav";
+  c.policy = "zero";
+  c.seed = 1;
+  const RenderResult r = render_episode(c);
+  CHECK(r.html.find("query.get('play') !== '0'") != std::string::npos);
+  CHECK(r.html.find("toggle();") != std::string::npos);
 }

@@ -281,3 +281,51 @@ TEST_CASE("report: time to target counts the runs that never reached it", "[repo
   REQUIRE(slurp(dir + "/report/index.html").find("target_table.svg") == std::string::npos);  // inline, not linked
   fs::remove_all(dir);
 }
+
+TEST_CASE("report: with fewer than 3 seeds a cell says 'n = 1: no interval' in grey, never an interval", "[report]") {
+  const std::string dir = (fs::temp_directory_path() / ("atacom_report_n1_" + std::to_string(::getpid()))).string();
+  fs::remove_all(dir);
+  const SweepSpec spec = parse_sweep_spec(json::parse(R"({"envs": ["table"], "algos": ["sac", "atacom-sac"],
+                                                          "seeds": [0], "steps": 3000})"));
+  save_or_check_spec(dir, spec);
+  for (const SweepCell& c : sweep_cells(spec)) {
+    const fs::path run = fs::path(dir) / c.run_dir();
+    fs::create_directories(run);
+    const double a = c.algo == "sac" ? 0 : 1;
+    const json sm = {{"env_steps", 3000}, {"eval_return_mean", -300 + 40 * a}, {"eval_discounted_return_mean", -90 + a},
+                     {"final_distance", 0.9 - 0.5 * a}, {"train_terminations", 10 - 10 * a},
+                     {"avg_episode_steps", 400}, {"train_avg_episode_steps", 300}, {"train_collisions", 31 * (1 - a)},
+                     {"train_violations", 50 * (1 - a)},
+                     {"best", {{"eval_return_mean", -300 + 40 * a}, {"eval_discounted_return_mean", -90},
+                               {"final_distance", 0.9 - 0.5 * a}, {"env_steps", 1000}}}};
+    std::ofstream(run / "summary.json") << sm.dump(2);
+    std::ofstream(run / "progress.csv") << "env_steps,updates,wall_s,eval_return_mean,final_distance\n"
+                                        << "1000,0,0.1,-400,1\n3000,0,0.2,-300,0.5\n";
+  }
+  ReportOptions o;
+  o.dir = dir;
+  write_report(o);
+  const std::string md = slurp(dir + "/report/summary.md"), html = slurp(dir + "/report/index.html");
+  CHECK(md.find("n = 1: no interval") != std::string::npos);
+  CHECK(md.find("n = 1: no P(improvement)") != std::string::npos);
+  CHECK(md.find("At most 1 seed per cell") != std::string::npos);  // says in words what one seed shows
+  CHECK(html.find("<td class=\"na\">") != std::string::npos);
+  CHECK(html.find("At most 1 seed per cell") != std::string::npos);
+  // The IQM cell has the value and the note, no bracketed interval; the CSVs' interval and probability fields are empty.
+  CHECK(md.find("| sac | eval_return_mean | 1 | -300 (n = 1: no interval) |") != std::string::npos);
+  std::istringstream csv(slurp(dir + "/report/summary.csv"));
+  std::string line;
+  std::getline(csv, line);
+  size_t rows = 0;
+  while (std::getline(csv, line)) {
+    INFO(line);
+    CHECK(line.size() >= 2);
+    CHECK(line.substr(line.size() - 2) == ",,");
+    ++rows;
+  }
+  CHECK(rows > 0);
+  std::istringstream pcsv(slurp(dir + "/report/prob_improvement.csv"));
+  std::getline(pcsv, line);
+  while (std::getline(pcsv, line)) CHECK(line.back() == ',');
+  fs::remove_all(dir);
+}

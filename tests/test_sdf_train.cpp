@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include "atacom/parallel.hpp"
+#include "envs/arm/arm_scene.hpp"
+#include "envs/arm/tiago_model.hpp"
 #include "train/redsdf_train.hpp"
 
 using namespace atacom;
@@ -33,8 +35,22 @@ TEST_CASE("sdf data: labels are the scene's smooth union (never above the exact 
     const Eigen::Vector3d p(e.p[size_t(3 * i)], e.p[size_t(3 * i + 1)], e.p[size_t(3 * i + 2)]);
     CHECK(std::abs(e.y[size_t(i)] - union_distance_exact(table, p)) < 1e-6);
   }
-  CHECK_THROWS_WITH(sdf_object_geometry("human"), Catch::Contains("static-object geometry exists for table and shelf only"));
-  CHECK_THROWS_WITH(sdf_object_geometry("tiago"), Catch::Contains("static-object geometry exists for table and shelf only"));
+  CHECK_THROWS_WITH(sdf_object_geometry("human"), Catch::Contains("static-object geometry exists for table, shelf and hri_table only"));
+  CHECK_THROWS_WITH(sdf_object_geometry("tiago"), Catch::Contains("static-object geometry exists for table, shelf and hri_table only"));
+  // HRI's table in its object frame: the env's box, moved back by the scene's placement.
+  Eigen::Vector3d centre;
+  const ShapeUnion ht = sdf_object_geometry("hri_table", &centre);
+  REQUIRE(ht.shapes.size() == 1);
+  CHECK((centre - Eigen::Vector3d(0.0, 0.0, 0.4)).norm() < 1e-12);
+  const ArmSceneConfig sc = default_arm_scene_config(ArmTask::Hri);
+  const ArmScene scene = build_arm_scene(sc, load_tiago_arm_model(0.3));
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  arm_object_placement(sc, R, t);
+  for (int k = 0; k < 3; ++k) {
+    CHECK(std::abs(ht.shapes[0].a[k] + t(k) - scene.obstacle.shapes[0].a[k]) < 1e-12);
+    CHECK(ht.shapes[0].half[k] == scene.obstacle.shapes[0].half[k]);
+  }
 }
 
 TEST_CASE("sdf training: short run lowers the error, writes its files, same weights for 1 and 2 threads", "[redsdf]") {

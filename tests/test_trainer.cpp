@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <unistd.h>
 
@@ -373,5 +374,28 @@ TEST_CASE("trainer: a run's policy loads from its directory and acts like the tr
   }
   std::ofstream(dir + "/policy_final.bin", std::ios::trunc) << "garbage";  // the policy lives here, not in the checkpoint
   CHECK_THROWS(atacom::TrainedPolicy::load(dir));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("trainer: the ETA waits for the warm-up, then counts from the first update", "[trainer]") {
+  const std::string dir = tmp_dir("eta");
+  json cfg = small_run(600);  // updates start after 200 transitions
+  cfg["train"]["eval_every"] = 100;
+  std::ostringstream log;
+  atacom::TrainOptions o;
+  o.out_dir = dir;
+  o.log = &log;  // not a terminal: one line per evaluation
+  atacom::run_training(atacom::resolve_run_config(cfg), o);
+  std::istringstream lines(log.str());
+  std::vector<std::string> l;
+  for (std::string s; std::getline(lines, s);) l.push_back(s);
+  REQUIRE(l.size() == 6);
+  CHECK(l[0].find(" 100/600 steps") != std::string::npos);
+  CHECK(l[0].find("ETA after warm-up") != std::string::npos);  // no rate yet: the fast warm-up would mislead
+  CHECK(l[1].find("ETA after warm-up") != std::string::npos);  // 200 steps: the first update is the next step
+  for (size_t i = 2; i < l.size(); ++i) {
+    INFO(l[i]);
+    CHECK(std::regex_search(l[i], std::regex("ETA [0-9]+(s|m[0-9]{2}s)")));
+  }
   fs::remove_all(dir);
 }

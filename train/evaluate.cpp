@@ -174,8 +174,10 @@ nlohmann::json eval_json(const EvalResult& r) {
     // Collision counts also under the plural names the rollout command and
     // the issues use: collisions, wall_collisions, ...
     if (ends_with_collision(name)) s[name + "s"] = jnum(r.info[c]);
-    // Episodes with a spill (HRI-Sim's per-episode 0/1 column): a count.
-    if (name == "spill") s["spills"] = jnum(r.info[c] * r.episodes);
+    // Episodes with a spill (HRI-Sim's per-episode 0/1 columns): a count of
+    // the evaluation's episodes, "spills" and "spills_<deg>".
+    // (a per-episode mean of 0/1 times the episodes: rounded, so 4 and not 3.9999999999999996).
+    else if (!event_total_name(name).empty()) s[event_total_name(name)] = jnum(std::round(r.info[c] * r.episodes));
   }
   return s;
 }

@@ -105,12 +105,19 @@ void from_json(const json& j, SdfTrainConfig& c) {
 }
 
 ShapeUnion sdf_object_geometry(const std::string& object, Eigen::Vector3d* centre) {
-  if (object != "table" && object != "shelf")
-    throw std::invalid_argument("--object " + object + ": static-object geometry exists for table and shelf only");
-  ArmSceneConfig sc = default_arm_scene_config(parse_arm_task(object));
-  sc.position.setZero();
+  if (object != "table" && object != "shelf" && object != "hri_table")
+    throw std::invalid_argument("--object " + object + ": static-object geometry exists for table, shelf and hri_table only");
+  // hri_table: HRI-Sim's shared table (the reference's HRI cube, 4.4). Its
+  // scene places the box by absolute coordinates, so it is built at the
+  // default placement and moved back into the object frame (yaw 0 there).
+  const bool hri = object == "hri_table";
+  ArmSceneConfig sc = default_arm_scene_config(hri ? ArmTask::Hri : parse_arm_task(object));
+  const Eigen::Vector3d placed = hri ? sc.position : Eigen::Vector3d::Zero();
+  if (!hri) sc.position.setZero();
   sc.yaw_deg = 0;
-  const ArmScene scene = build_arm_scene(sc, load_tiago_arm_model(0.3));
+  ArmScene scene = build_arm_scene(sc, load_tiago_arm_model(0.3));
+  for (Shape& sh : scene.obstacle.shapes)
+    for (int k = 0; k < 3; ++k) sh.a[k] -= placed(k);
   if (centre) {
     Eigen::Vector3d lo, hi;
     union_box_bounds(scene.obstacle, lo, hi);

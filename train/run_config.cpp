@@ -14,6 +14,8 @@ namespace atacom {
 
 TrainConfig default_train_config() { return TrainConfig{}; }
 
+int64_t default_eval_every(int64_t steps) { return steps < 50000 ? 1000 : 10000; }
+
 void to_json(nlohmann::json& j, const TrainConfig& c) {
   j = nlohmann::json{{"env", c.env}, {"algo", c.algo}, {"seed", c.seed}, {"steps", c.steps},
                      {"num_envs", c.num_envs}, {"eval_every", c.eval_every}, {"eval_episodes", c.eval_episodes},
@@ -92,6 +94,10 @@ RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* trai
     throw std::invalid_argument("preset '" + c.train.preset + "': " + e.what());
   }
   if (t) from_json(*t, c.train);
+  // Unless the preset or the file sets it: an evaluation every 1000 steps
+  // for runs under 50k steps, so a short run has a curve (default_eval_every).
+  const bool eval_every_set = (t && t->contains("eval_every")) || (from_preset("train") && from_preset("train")->contains("eval_every"));
+  if (!train_base && !eval_every_set) c.train.eval_every = default_eval_every(c.train.steps);
   validate(c.train);
   if (const auto* h = r.sub("host")) c.host = *h;  // a record of where a run was computed: kept, not read
   // Learner sections: the ones the algorithm's own learner reads, and no other.

@@ -172,8 +172,7 @@ void ProgressFile::restore(int64_t rows) {
 
 // ---------------------------------------------------------------- progress.svg
 std::string learning_curve_svg(const std::string& title, const std::vector<double>& steps,
-                               const std::vector<double>& mean, const std::vector<double>& sd,
-                               const std::string& color) {
+                               const std::vector<double>& mean, const std::vector<double>& sd) {
   double x1 = 1, y0 = 0, y1 = 1;
   bool any = false;
   for (size_t i = 0; i < steps.size(); ++i) {
@@ -202,10 +201,10 @@ std::string learning_curve_svg(const std::string& title, const std::vector<doubl
     down.emplace_back(steps[i], mean[i] - s);
   }
   if (!line.empty()) {
-    svg.polyline(up, color, 1.0, 0.35);
-    svg.polyline(down, color, 1.0, 0.35);
-    svg.polyline(line, color, 2.0);
-    for (const auto& [x, y] : line) svg.circle(x, y, 0.006 * x1, color);  // one dot per evaluation
+    svg.polyline(up, "#1f77b4", 1.0, 0.35);
+    svg.polyline(down, "#1f77b4", 1.0, 0.35);
+    svg.polyline(line, "#1f77b4", 2.0);
+    for (const auto& [x, y] : line) svg.circle(x, y, 0.006 * x1, "#1f77b4");  // one dot per evaluation
   }
   return svg.str();
 }

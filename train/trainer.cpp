@@ -23,6 +23,7 @@
 #include "src/core/host_info.hpp"
 #include "train/algorithms.hpp"
 #include "train/checkpoint.hpp"
+#include "train/progress_svg.hpp"
 #include "train/run_files.hpp"
 #include "train/run_policy.hpp"
 #include "train/run_state.hpp"
@@ -51,10 +52,6 @@ std::string duration(double s) {
 }
 
 nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
-bool ends_with_collision(const std::string& name) {
-  return name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0;
-}
 
 class Run {
  public:
@@ -102,6 +99,11 @@ class Run {
   std::chrono::steady_clock::time_point start_, last_print_;
   double eval_s_ = 0;              // wall time this process spent evaluating (excluded from steps/s)
   int64_t steps_at_start_ = 0;
+  // The ETA's rate is measured from the first step with learner updates on:
+  // warm-up steps (random actions, no updates) run many times faster and
+  // would make it far too short. Unset (-1) until then.
+  int64_t eta_steps0_ = -1;
+  std::chrono::steady_clock::time_point eta_t0_;
   double last_eval_return_ = kNaN;
   int64_t last_ckpt_steps_ = -1;   // env_steps of the newest checkpoint written by this process
   bool stopped_ = false;           // the run ended at the quality target before its budget (train.stop_at_target)
@@ -236,10 +238,8 @@ void Run::record(const EvalResult& ev) {
   c.recent_return_sum = 0;
   last_eval_return_ = ev.return_mean;
   const TrainConfig& t = cfg_.train;
-  write_file_atomic(path("progress.svg"),
-                    learning_curve_svg(t.env + " / " + t.algo + " / seed " + std::to_string(t.seed),
-                                       progress_.series(0), progress_.series(3), progress_.series(4),
-                                       algorithm_color(t.algo)));
+  write_file_atomic(path("progress.svg"), progress_svg(t.env + " / " + t.algo + " / seed " + std::to_string(t.seed),
+                                                      progress_, spec_.num_constraints > 0));
   // The best evaluation by the learner's score (the env's return without a
   // learner; the first of equals; NaN never wins).
   const double score = learner_ ? learner_->best_score(ev) : ev.return_mean;
@@ -348,7 +348,13 @@ void Run::print_progress(bool force, const EvalResult* ev) {
   const RunCounters& c = st_.counters;
   const double el = std::chrono::duration<double>(now - start_).count() - eval_s_;
   const double sps = el > 0 ? double(c.env_steps - steps_at_start_) / el : 0.0;
-  const double eta = sps > 0 ? double(t.steps - c.env_steps) / sps : kNaN;
+  // ETA: the remaining steps at the rate since updates began (evaluations
+  // included, as they will recur); during warm-up it is not known yet.
+  const bool warming = learner_ && eta_steps0_ < 0;
+  const double since = std::chrono::duration<double>(now - eta_t0_).count();
+  const double rate = eta_steps0_ >= 0 && since > 0 ? double(c.env_steps - eta_steps0_) / since : 0.0;
+  const std::string eta = warming ? std::string("after warm-up")
+                                  : rate > 0 ? duration(double(t.steps - c.env_steps) / rate) : std::string("?");
   char b[320];
   if (!learner_ && ev)
     std::snprintf(b, sizeof(b), "%s/%s seed %lld: %d evaluation episodes: return %s  final distance %s  "
@@ -360,7 +366,7 @@ void Run::print_progress(bool force, const EvalResult* ev) {
   std::snprintf(b, sizeof(b),
                 "%s/%s seed %lld: %lld/%lld steps  %.0f steps/s  ETA %s  last return %s  eval %s  violations %lld",
                 t.env.c_str(), t.algo.c_str(), static_cast<long long>(t.seed), static_cast<long long>(c.env_steps),
-                static_cast<long long>(t.steps), sps, duration(eta).c_str(),
+                static_cast<long long>(t.steps), sps, eta.c_str(),
                 ProgressFile::format(c.last_train_return).c_str(),
                 ProgressFile::format(ev ? ev->return_mean : last_eval_return_).c_str(),
                 static_cast<long long>(c.train_violations));
@@ -409,7 +415,7 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
     const std::string& name = spec_.info_names[size_t(col)];
     s["train_" + name] = jnum(st_.train_info_sums[size_t(col)]);
     // Collision counts also under the plural names: train_collisions, ...
-    if (ends_with_collision(name) || name == "spill") s["train_" + name + "s"] = jnum(st_.train_info_sums[size_t(col)]);
+    if (!event_total_name(name).empty()) s["train_" + event_total_name(name)] = jnum(st_.train_info_sums[size_t(col)]);
   }
   if (learner_) {
     const nlohmann::json ls = learner_->summary();
@@ -473,6 +479,10 @@ TrainSummary Run::go() {
       break;
     }
     step();
+    if (eta_steps0_ < 0 && learner_->updates() > 0) {  // warm-up over: the ETA's rate starts here
+      eta_steps0_ = c.env_steps;
+      eta_t0_ = std::chrono::steady_clock::now();
+    }
     bool end = c.env_steps >= t.steps;
     const bool stop = (opts_.stop_after > 0 && c.env_steps >= opts_.stop_after) ||
                       (opts_.stop_signal && *opts_.stop_signal != 0);

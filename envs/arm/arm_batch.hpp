@@ -46,7 +46,7 @@ struct ArmBatch {
   ArmMovingObstacle human;         // the moving group's obstacle
   std::vector<double> cup;         // (N x 3)   cup axis; written with c
   std::vector<double> min_hd;      // (N)       smallest human distance so far in the episode; step, reset
-  std::vector<uint8_t> spilled;    // (N)       1 once the episode had a spill; step, reset
+  std::vector<uint8_t> spilled;    // (N)       bit 0: the episode spilled at spill_angle, bit 1 at spill_angle_strict; step, reset
   // Step scratch (HRI), written and read inside one lane group of step.
   std::vector<double> items;       // (N x items x 6) robot parts in the base frame (contact check)
   std::vector<uint8_t> contact;    // (N)       human contact of the last step

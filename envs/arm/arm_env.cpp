@@ -4,6 +4,7 @@
 #include "envs/arm/arm_env.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "atacom/parallel.hpp"
@@ -65,6 +66,10 @@ void ArmEnv::set_state(int i, const double* q, const double* goal) {
   std::copy(goal, goal + 3, &batch_.goal[se * 3]);
   batch_.t[se] = 0;
   batch_.ret[se] = 0.0;
+  if (model_->hri()) {  // the episode's spill flags and closest approach start over too
+    batch_.spilled[se] = 0;
+    batch_.min_hd[se] = INFINITY;
+  }
   arm_refresh(*model_, batch_, i, buffers_.obs.data());
 }
 

@@ -10,7 +10,8 @@
 // Constraints: row groups composed per task (envs/arm/arm_rows.hpp lists
 // them; docs/envs_arm.md every row). Table/shelf: k = 34 (joint 14, scene 9,
 // body 9, ground 2); HRI adds 9 rows against the human (a moving group:
-// J_x = dc/dt, xdot = 1, p = 1) and the cup-upright row, k = 44.
+// J_x = dc/dt, xdot = 1, p = 1), k = 43; hri-upright also the cup-upright
+// row, k = 44. HRI counts spills (cup tilt past an angle) as an outcome.
 //
 // Ground truth, separate from the constraints, decides termination: any link
 // capsule or PoI sphere intersecting the obstacle, the floor, the human (HRI)
@@ -122,8 +123,13 @@ class ArmEnv final : public ControlAffineEnv {
 nlohmann::json table_env_default_config();
 nlohmann::json shelf_env_default_config();
 nlohmann::json hri_env_default_config();
+nlohmann::json hri_upright_env_default_config();  // hri + hri.upright_row (ours, docs/envs_arm.md)
 std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs);
 std::unique_ptr<BatchEnv> make_shelf_env(const nlohmann::json& config, int num_envs);
 std::unique_ptr<BatchEnv> make_hri_env(const nlohmann::json& config, int num_envs);
+// A resolved "hri" env config written before issue 30 (it has hri.targets but
+// no hri.upright_row) described today's hri-upright with uniform starts and an
+// analytic table: the keys that say so, added to it (others: unchanged).
+nlohmann::json hri_upgrade_pre_issue30_config(const nlohmann::json& overrides);
 
 }  // namespace atacom

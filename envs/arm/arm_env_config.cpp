@@ -13,6 +13,8 @@ namespace {
 
 using nlohmann::json;
 
+constexpr double kPi = 3.14159265358979323846;
+
 double num(const json& j, const std::string& what) {
   if (!j.is_number()) throw std::invalid_argument(what + " must be a number");
   const double v = j.get<double>();
@@ -63,9 +65,11 @@ AlignedBox read_box(const json& j, const std::string& what) {
 
 // HRI-Sim (docs/envs_arm.md): the reference's HRI scene (4.4) with its torso
 // height 0.3 and its three target boxes; rows and reward of TableEnv plus the
-// human rows, the upright row and a tilt penalty.
+// human rows and a tilt penalty (the upright row only with hri.upright_row);
+// the paper's learned fields for the human, the table and the robot body.
 void set_hri_defaults(ArmEnvConfig& c) {
   c.torso_lift = 0.3;
+  c.sdf = {{"human", "learned"}, {"table", "learned"}, {"tiago", "learned"}};
   c.reward.rho_ang = 0.0;  // any approach direction: only the cup's tilt matters
   ArmHriConfig& h = c.hri;
   // Human rows: 5 cm beyond the PoI's cover radius; the distal PoIs move
@@ -76,13 +80,13 @@ void set_hri_defaults(ArmEnvConfig& c) {
     h.human.margin[size_t(i)] = 0.07;
     h.human.tolerance[size_t(i)] = 0.05;
   }
-  // Upright row in cosine units (c = cos(theta_max - margin) - u_z); beta 30
-  // as the other rows; tolerance 0.02 (about 2.6 deg at 25 deg).
+  // Upright row (hri-upright) in cosine units (c = cos(theta_max - margin) -
+  // u_z); beta 30 as the other rows; tolerance 0.02 (about 2.6 deg at 25 deg).
   h.upright = make_group(1, 0.0, 30.0, 1e-6, 0.02);
   h.targets = {{{0.4, 0.0, 0.9}, {0.7, 0.3, 1.0}}, {{0.5, -0.1, 1.1}, {0.8, 0.1, 1.3}},
                {{0.6, -0.4, 0.85}, {0.9, -0.2, 1.0}}};
   c.goal_library_size = 256;
-  // Fallback start (checked safe against the static and upright rows at construction).
+  // Fallback start, the reference's (cup vertical; checked safe against the static rows at construction).
   c.home = {0.0, 0.0, 1.5708, 1.5708, 1.5708, 0.0, 0.0};
   c.target = {0.15, {"spill"}};  // the goal within 15 cm, the cup never spilled
 }
@@ -90,6 +94,10 @@ void set_hri_defaults(ArmEnvConfig& c) {
 }  // namespace
 
 // ---------------------------------------------------------------- config
+
+std::string ArmHriConfig::strict_spill_name() const {
+  return "spill_" + std::to_string(std::lround(spill_angle_strict * 180.0 / kPi));
+}
 
 ArmEnvConfig default_arm_env_config(ArmTask task) {
   ArmEnvConfig c;
@@ -166,8 +174,12 @@ void ArmEnvConfig::validate() const {
     if (!(hri.theta_max > 0.0 && hri.theta_max < 1.5)) throw std::invalid_argument("config: env.hri.theta_max must be in (0, 1.5) rad");
     if (!(hri.upright.margin[0] >= 0.0 && hri.upright.margin[0] < hri.theta_max))
       throw std::invalid_argument("config: env.hri.upright.margin must be in [0, env.hri.theta_max) rad");
-    if (!(hri.spill_angle > hri.theta_max && hri.spill_angle < 3.14))
-      throw std::invalid_argument("config: env.hri.spill_angle must be in (env.hri.theta_max, pi) rad");
+    if (!(hri.spill_angle > 0.0 && hri.spill_angle < kPi))
+      throw std::invalid_argument("config: env.hri.spill_angle must be in (0, pi) rad");
+    if (!(hri.spill_angle_strict > 0.0 && hri.spill_angle_strict < hri.spill_angle))
+      throw std::invalid_argument("config: env.hri.spill_angle_strict must be in (0, env.hri.spill_angle) rad");
+    if (!(hri.start_tilt > 0.0 && hri.start_tilt <= kPi))
+      throw std::invalid_argument("config: env.hri.start_tilt must be in (0, pi] rad (pi: uniform starts)");
     if (!(hri.cup_axis.norm() > 0.5 && hri.cup_axis.norm() < 2.0)) throw std::invalid_argument("config: env.hri.cup_axis must be a unit vector");
     if (!(hri.human_blend >= 0.0 && hri.human_blend < 0.1)) throw std::invalid_argument("config: env.hri.human_blend must be in [0, 0.1) m");
     if (!(hri.frames_per_step > 0.0 && hri.frames_per_step <= 4.0))
@@ -209,8 +221,11 @@ void to_json(json& j, const ArmEnvConfig& c) {
     const ArmHriConfig& h = c.hri;
     json targets = json::array();
     for (const AlignedBox& b : h.targets) targets.push_back(box_json(b));
-    j["hri"] = {{"theta_max", h.theta_max},
+    j["hri"] = {{"upright_row", h.upright_row},
+                {"theta_max", h.theta_max},
                 {"spill_angle", h.spill_angle},
+                {"spill_angle_strict", h.spill_angle_strict},
+                {"start_tilt", h.start_tilt},
                 {"cup_axis", {h.cup_axis.x(), h.cup_axis.y(), h.cup_axis.z()}},
                 {"human", group_json(h.human)},
                 {"upright", group_json(h.upright)},
@@ -279,8 +294,13 @@ void from_json(const json& j, ArmEnvConfig& c) {
   if (task == ArmTask::Hri) {
     ConfigReader s(r.at("hri"), r.path("hri"));
     ArmHriConfig& x = c.hri;
+    const json& ur = s.at("upright_row");
+    if (!ur.is_boolean()) throw std::invalid_argument("config key '" + s.path("upright_row") + "' must be true or false");
+    x.upright_row = ur.get<bool>();
     x.theta_max = s.number("theta_max", range::open(0.0, 1.5));
-    x.spill_angle = s.number("spill_angle", range::open(0.0, 3.14));
+    x.spill_angle = s.number("spill_angle", range::open(0.0, kPi));
+    x.spill_angle_strict = s.number("spill_angle_strict", range::open(0.0, kPi));
+    x.start_tilt = s.number("start_tilt", range::open_closed(0.0, kPi));
     const auto a = num_array(s.at("cup_axis"), 3, s.path("cup_axis"));
     x.cup_axis = Eigen::Vector3d(a[0], a[1], a[2]);
     x.human = read_group(s.at("human"), kArmPoi, s.path("human"));

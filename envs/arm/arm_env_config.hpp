@@ -37,19 +37,34 @@ struct ArmRewardConfig {
 
 // HRI-Sim only (docs/envs_arm.md, section HRI). The cup's axis u is the
 // grasping frame's `cup_axis` (a unit vector in that frame); its tilt is the
-// angle between u and +z.
+// angle between u and +z. The paper's task ("hri") keeps the cup upright
+// through the reward alone and counts spills as an outcome; "hri-upright"
+// (ours) adds a constraint row on the tilt.
 struct ArmHriConfig {
-  double theta_max = 0.4363;     // upright row: tilt <= theta_max - upright.margin (25 deg), rad
-  double spill_angle = 0.6981;   // a spill is counted when the tilt exceeds this (40 deg; > theta_max), rad
+  bool upright_row = false;      // true: the cup-upright row (k = 44; hri-upright), false: no row (k = 43; the paper's)
+  double theta_max = 0.4363;     // upright row: tilt <= theta_max - upright.margin (25 deg), rad; unused without the row
+  // Spills (counted, never a constraint): a cup 8 cm across filled to 2 cm
+  // below its rim overflows, held still, at atan(2 / 4) = 26.6 deg; 1 cm below
+  // at atan(1 / 4) = 14 deg (docs/envs_arm.md). Info `spill` at spill_angle,
+  // `spill_<deg>` at spill_angle_strict.
+  double spill_angle = 0.4363;          // 25 deg, rad
+  double spill_angle_strict = 0.2618;   // 15 deg, rad (< spill_angle)
+  // Starts (and goal configurations) hold the cup within start_tilt of
+  // vertical, drawn from a library of such configurations; pi: starts uniform
+  // in the joint box as TableEnv's (every orientation; the env before issue 30).
+  double start_tilt = 0.1745;    // 10 deg, rad
   Eigen::Vector3d cup_axis{0, -1, 0};  // the grasping frame's -y: vertical in the reference's HRI start pose
   ArmRowGroup human;             // 9 rows: margin beyond the PoI's cover radius, m
-  ArmRowGroup upright;           // 1 row: margin in rad below theta_max
+  ArmRowGroup upright;           // 1 row: margin in rad below theta_max (read and written with or without the row)
   double human_blend = 0.02;     // smooth-min k over the 16 capsules, m (error bound 15 k / 4)
   double rho_tilt = 0.5;         // reward per radian of tilt
-  double frames_per_step = 0.5;  // motion frames per env step (reference: one frame every 2 steps)
+  double frames_per_step = 1.0;  // motion frames per env step: 1 = real time (30 Hz library, 30 Hz env); the reference's 0.5 = half speed
   bool compensate_motion = true;   // false: J_x = 0 (ablation: the projector ignores the human's motion)
   HumanSplit split = HumanSplit::Train;
   std::vector<AlignedBox> targets;  // goal regions, one drawn uniformly per episode (reference 4.4)
+
+  // Info column of the strict spill count: "spill_<degrees, rounded>".
+  std::string strict_spill_name() const;
 };
 
 struct ArmEnvConfig {
@@ -70,9 +85,10 @@ struct ArmEnvConfig {
   uint64_t goal_library_seed = 1;   // their RNG seed (a property of the task, not of the run)
   double goal_jitter = 0.1;         // per-reset perturbation of a library configuration, rad
   std::array<double, kArmJoints> home{};  // fallback initial configuration (must satisfy the constraints)
-  // Distance fields by object (key "table" or "shelf", the env's own; "human" on hri; "tiago", the robot body):
-  // "analytic" (default), "learned" (the shipped data/sdf/<object>) or
-  // "learned:<dir>" (envs/arm/arm_learned_sdf.hpp). Absent = analytic.
+  // Distance fields by object (key "table" or "shelf", the env's own; on hri "human" and "table", the
+  // shared table; "tiago", the robot body): "analytic", "learned" (the shipped field,
+  // envs/arm/arm_learned_sdf.hpp) or "learned:<dir>". Absent = analytic. Defaults:
+  // analytic on table and shelf, learned on hri (the paper's ReDSDF constraints).
   std::map<std::string, std::string> sdf;
   // Quality target (time_to_target, docs/training.md): final distance 0.05 m
   // on table and shelf; 0.15 m with no spill on hri.
@@ -82,7 +98,8 @@ struct ArmEnvConfig {
   void validate() const;
 };
 
-// The one default factory per task (documented in docs/envs_arm.md).
+// The one default factory per task (documented in docs/envs_arm.md). HRI:
+// the paper's task; hri-upright is this plus hri.upright_row = true.
 ArmEnvConfig default_arm_env_config(ArmTask task);
 void to_json(nlohmann::json& j, const ArmEnvConfig& c);
 void from_json(const nlohmann::json& j, ArmEnvConfig& c);  // unknown or missing keys rejected

@@ -97,11 +97,21 @@ void reset_env(const ArmModel& m, ArmBatch& b, int e, float* obs) {
     b.min_hd[se] = INFINITY;
     b.spilled[se] = 0;
   }
+  // Initial state: first safe candidate in draw order (deterministic per env):
+  // uniform in the joint box, or (HRI with upright starts) a start-library
+  // configuration jittered per joint, the cup within start_tilt.
+  const int S = static_cast<int>(m.start_lib_q.size() / kArmJoints);
   auto draw = [&]() {
+    if (S > 0) {
+      const double* qb = &m.start_lib_q[static_cast<size_t>(rng.below(static_cast<uint64_t>(S))) * kArmJoints];
+      for (int l = 0; l < kLanes; ++l)
+        for (int j = 0; j < kArmJoints; ++j)
+          ql[j][l] = std::clamp(qb[j] + cfg.goal_jitter * rng.uniform(-1.0, 1.0), k.q_lo[j], k.q_hi[j]);
+      return;
+    }
     for (int l = 0; l < kLanes; ++l)
       for (int j = 0; j < kArmJoints; ++j) ql[j][l] = rng.uniform(k.q_lo[j], k.q_hi[j]);
   };
-  // Initial state: first safe candidate in draw order (deterministic per env).
   bool found = false;
   for (int s = 0; s < cfg.sample_batches && !found; ++s) {
     draw();
@@ -110,7 +120,7 @@ void reset_env(const ArmModel& m, ArmBatch& b, int e, float* obs) {
     if (m.hri()) lanes::arm_hri_rows_lanes(k, fk, h, o, true);
     lanes::arm_ground_truth_lanes(k, ql, fk, o, kLanes);
     for (int l = 0; l < kLanes && !found; ++l)
-      if (lane_ok(l)) {
+      if (lane_ok(l) && m.cup_upright(o, l)) {
         for (int j = 0; j < kArmJoints; ++j) b.q[se * kArmJoints + j] = ql[j][l];
         store_lane(m, b, fk, o, l, e, true);
         found = true;
@@ -240,12 +250,16 @@ void step_group(const ArmModel& m, ArmBatch& b, EnvBuffers& B, const double* act
     info[kInfoResetFallback] = 0.0f;
     if (hri) {
       b.min_hd[e] = std::min(b.min_hd[e], b.hd[e]);
-      const bool spill = tilt > cfg.hri.spill_angle && !b.spilled[e];
-      b.spilled[e] = b.spilled[e] || spill;
+      // spilled: bit 0 once the tilt passed spill_angle, bit 1 spill_angle_strict
+      // (each counts once per episode, at its first step).
+      const bool spill = tilt > cfg.hri.spill_angle && !(b.spilled[e] & 1);
+      const bool spill_strict = tilt > cfg.hri.spill_angle_strict && !(b.spilled[e] & 2);
+      b.spilled[e] = uint8_t(b.spilled[e] | (spill ? 1 : 0) | (spill_strict ? 2 : 0));
       info[kInfoHumanCollision] = human_hit ? 1.0f : 0.0f;
       info[kInfoSpill] = spill ? 1.0f : 0.0f;
       info[kInfoMinHumanDistance] = static_cast<float>(b.min_hd[e]);
       info[kInfoTilt] = static_cast<float>(tilt);
+      info[kInfoSpillStrict] = spill_strict ? 1.0f : 0.0f;
     }
     float* fobs = &B.final_obs[e * d];
     arm_write_obs(m, b, ei, fobs);
@@ -373,13 +387,13 @@ bool arm_sample_goal(const ArmModel& m, ArmBatch& b, int e, const double* away_f
         ql[j][l] = std::clamp(qb[j] + cfg.goal_jitter * rng.uniform(-1.0, 1.0), k.q_lo[j], k.q_hi[j]);
     lanes::arm_fk_lanes(k.fk, ql, fk, false);
     lanes::arm_constraints_lanes(k, ql, fk, o, false);
-    if (m.rows.has(ArmRowKind::Upright)) lanes::arm_upright_row_lanes(k, fk, o, false);
+    if (m.hri()) lanes::arm_upright_row_lanes(k, fk, o, false);  // the cup axis (and the upright row when composed)
     lanes::arm_ground_truth_lanes(k, ql, fk, o, kLanes);
     for (int l = 0; l < kLanes; ++l) {
       const Eigen::Vector3d g(fk.grasp_p[0][l], fk.grasp_p[1][l], fk.grasp_p[2][l]);
       if (!in_box(g) || (g - start).norm() < cfg.goal_min_distance) continue;
       if (o.collision[l] || o.joint_violation[l]) continue;
-      if (!m.static_rows_ok(o, l)) continue;  // the goal is a place: the moving groups' rows do not apply
+      if (!m.pose_ok(o, l)) continue;  // the goal is a place: the moving groups' rows do not apply
       for (int r = 0; r < 3; ++r) goal[r] = g(r);
       return true;
     }

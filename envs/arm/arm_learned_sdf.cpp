@@ -9,10 +9,11 @@ namespace atacom {
 
 namespace {
 
-// The weight directory of `spec` for `key` ("" for analytic).
-std::string learned_dir(const std::string& key, const std::string& spec) {
+// The weight directory of `spec` for `key` ("" for analytic); `shipped`
+// names the field under data/sdf (the key's own by default).
+std::string learned_dir(const std::string& key, const std::string& spec, const std::string& shipped = "") {
   if (spec == "analytic") return "";
-  if (spec == "learned") return data_dir() + "/sdf/" + key;
+  if (spec == "learned") return data_dir() + "/sdf/" + (shipped.empty() ? key : shipped);
   if (spec.rfind("learned:", 0) == 0 && spec.size() > 8) {
     std::string dir = spec.substr(8);
     // A relative path names a directory from here or, failing that, from the data folder's parent
@@ -72,15 +73,20 @@ std::shared_ptr<LearnedObstacle> load_arm_learned_body(const std::map<std::strin
 
 std::shared_ptr<LearnedObstacle> load_arm_learned_obstacle(const std::map<std::string, std::string>& sdf,
                                                            const ArmSceneConfig& scene) {
-  const std::string object = arm_task_name(scene.task);
+  // The env's key and the field's object: HRI's shared table is "table" in the
+  // env config and the field "hri_table" (a box of its own, data/sdf/hri_table).
+  const bool hri = scene.task == ArmTask::Hri;
+  const std::string key_name = hri ? "table" : arm_task_name(scene.task);
+  const std::string object = hri ? "hri_table" : key_name;
   std::shared_ptr<LearnedObstacle> out;
   for (const auto& [key, spec] : sdf) {
-    if (key == "human" && scene.task == ArmTask::Hri) continue;  // load_arm_learned_human
-    if (key == "tiago") continue;                                 // load_arm_learned_body
-    if (key != object)
+    if (key == "human" && hri) continue;  // load_arm_learned_human
+    if (key == "tiago") continue;         // load_arm_learned_body
+    if (key != key_name)
       throw std::invalid_argument("config key 'env.sdf." + key + "' names no field of this env (" +
-                                  (scene.task == ArmTask::Hri ? std::string("its field is human") : "its object is " + object) + ")");
-    const std::string dir = learned_dir(key, spec);
+                                  (hri ? std::string("its fields are human, table and tiago")
+                                       : "its object is " + key_name) + ")");
+    const std::string dir = learned_dir(key, spec, object);
     if (dir.empty()) continue;
     auto model = std::make_shared<RedsdfModel>(load_redsdf(dir, object));
     if (model->arch.pose_dim != 0)
@@ -99,11 +105,11 @@ nlohmann::json sdf_flag_override(const std::string& env, const std::string& mode
   if (mode != "analytic" && mode != "learned")
     throw std::invalid_argument("--sdf is '" + mode + "', must be analytic or learned");
   if (env == "table" || env == "shelf") return {{"sdf", {{env, mode}, {"tiago", mode}}}};
-  if (env == "hri") return {{"sdf", {{"human", mode}, {"tiago", mode}}}};
+  if (env == "hri" || env == "hri-upright") return {{"sdf", {{"human", mode}, {"table", mode}, {"tiago", mode}}}};
   if (mode == "analytic") return nlohmann::json::object();
   throw std::invalid_argument("--sdf learned: env '" + env +
-                              "' has no field with a shipped learned model (table, shelf, hri's human and the arm envs' "
-                              "robot body have)");
+                              "' has no field with a shipped learned model (table, shelf, hri's human and table and the "
+                              "arm envs' robot body have)");
 }
 
 }  // namespace atacom

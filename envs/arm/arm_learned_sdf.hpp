@@ -20,7 +20,8 @@
 
 namespace atacom {
 
-// The field of the env's obstacle per `sdf` (null when analytic). Throws
+// The field of the env's obstacle per `sdf` (key: table or shelf, the env's
+// own; on hri "table", the shipped field data/sdf/hri_table; null when analytic). Throws
 // std::invalid_argument for a key other than the env's object or a bad value,
 // std::runtime_error for a missing, corrupted or mismatched weight file.
 std::shared_ptr<LearnedObstacle> load_arm_learned_obstacle(const std::map<std::string, std::string>& sdf,
@@ -36,9 +37,9 @@ std::shared_ptr<LearnedHuman> load_arm_learned_human(const std::map<std::string,
 std::shared_ptr<LearnedObstacle> load_arm_learned_body(const std::map<std::string, std::string>& sdf, double torso_lift);
 
 // Env config override for `--sdf mode` on env `env`: {"sdf": {object: mode,
-// "tiago": mode}} for table and shelf, {"sdf": {"human": mode, "tiago": mode}}
-// for hri; "analytic" on any other env is an empty override, "learned" there
-// is an error (no shipped model).
+// "tiago": mode}} for table and shelf, {"sdf": {"human": mode, "table": mode,
+// "tiago": mode}} for hri and hri-upright; "analytic" on any other env is an
+// empty override, "learned" there is an error (no shipped model).
 nlohmann::json sdf_flag_override(const std::string& env, const std::string& mode);
 
 }  // namespace atacom

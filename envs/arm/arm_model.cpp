@@ -38,7 +38,7 @@ ArmModel::ArmModel(const ArmEnvConfig& cfg)
     : config(validated(cfg)),
       robot(load_tiago_arm_model(config.torso_lift)),
       scene(build_arm_scene(config.scene, robot)),
-      rows(ArmRowLayout::compose(config.task == ArmTask::Hri)),
+      rows(ArmRowLayout::compose(config.task == ArmTask::Hri, config.task == ArmTask::Hri && config.hri.upright_row)),
       kern(robot) {
   k = rows.k;
   dyn = rows.dynamic_rows();
@@ -54,6 +54,7 @@ ArmModel::ArmModel(const ArmEnvConfig& cfg)
     throw std::invalid_argument("config.home is not a safe start (max constraint " + std::to_string(home.c.maxCoeff()) +
                                 (home.collision ? ", in collision" : "") + "); choose another home configuration");
   build_goal_library();
+  build_start_library();
   build_spec();
 }
 
@@ -130,6 +131,7 @@ void ArmModel::build_kernel_tables() {
   for (int r = 0; r < 3; ++r) kc.cup_axis[r] = h.cup_axis(r);
   kc.cos_upright = std::cos(h.theta_max - h.upright.margin[0]);
   row_offset_hri[kArmPoi] = kc.cos_upright;
+  cos_start_tilt = std::cos(h.start_tilt);
   replay.frames_per_step = h.frames_per_step;
   replay.split = h.split;
   for (const lanes::ArmGtItem& it : kc.items) robot_radii.push_back(it.radius);
@@ -143,6 +145,8 @@ bool ArmModel::static_rows_ok(const lanes::ArmKernelOut& o, int l) const {
   }
   return ok;
 }
+
+bool ArmModel::pose_ok(const lanes::ArmKernelOut& o, int l) const { return static_rows_ok(o, l) && cup_upright(o, l); }
 
 bool ArmModel::in_goal_region(const Eigen::Vector3d& g) const {
   if (!hri()) return scene.goal_region.contains(g);
@@ -172,11 +176,11 @@ void ArmModel::build_goal_library() {
     }
     if (!any_in) continue;
     lanes::arm_constraints_lanes(kc, ql, fk, o, false);
-    if (rows.has(ArmRowKind::Upright)) lanes::arm_upright_row_lanes(kc, fk, o, false);
+    if (hri()) lanes::arm_upright_row_lanes(kc, fk, o, false);  // the cup axis (and the upright row when composed)
     lanes::arm_ground_truth_lanes(kc, ql, fk, o, kLanes);
     for (int l = 0; l < kLanes && static_cast<int>(goal_lib_q.size()) < want * kArmJoints; ++l) {
       if (!in[l] || o.collision[l] || o.joint_violation[l]) continue;
-      if (static_rows_ok(o, l)) {
+      if (pose_ok(o, l)) {
         for (int j = 0; j < kArmJoints; ++j) goal_lib_q.push_back(ql[j][l]);
         goal_lib_p.emplace_back(double(fk.grasp_p[0][l]), double(fk.grasp_p[1][l]), double(fk.grasp_p[2][l]));
       }
@@ -187,9 +191,40 @@ void ArmModel::build_goal_library() {
                                 "(region unreachable under the constraints)");
 }
 
+void ArmModel::build_start_library() {
+  if (!(hri() && config.hri.start_tilt < kStartTiltUniform)) return;
+  const lanes::ArmKernelConst& kc = kern;
+  Rng rng(config.goal_library_seed, 1);  // the goal library's seed, its own stream
+  lanes::ArmFkLanes fk;
+  lanes::ArmKernelOut o;
+  vd ql[kArmJoints];
+  const int want = config.goal_library_size;
+  std::vector<double> out;
+  // Cheap FK and the cup axis first (about 1 in 130 uniform configurations
+  // holds the cup within 10 deg), rows and ground truth only for those.
+  const int64_t max_batches = 4096 + 20000 * static_cast<int64_t>(want);
+  for (int64_t b = 0; b < max_batches && static_cast<int>(out.size()) < want * kArmJoints; ++b) {
+    for (int l = 0; l < kLanes; ++l)
+      for (int j = 0; j < kArmJoints; ++j) ql[j][l] = rng.uniform(kc.q_lo[j], kc.q_hi[j]);
+    lanes::arm_fk_lanes(kc.fk, ql, fk, false);
+    lanes::arm_upright_row_lanes(kc, fk, o, false);
+    bool any = false;
+    for (int l = 0; l < kLanes; ++l) any = any || cup_upright(o, l);
+    if (!any) continue;
+    lanes::arm_constraints_lanes(kc, ql, fk, o, false);
+    lanes::arm_ground_truth_lanes(kc, ql, fk, o, kLanes);
+    for (int l = 0; l < kLanes && static_cast<int>(out.size()) < want * kArmJoints; ++l)
+      if (!o.collision[l] && !o.joint_violation[l] && pose_ok(o, l))
+        for (int j = 0; j < kArmJoints; ++j) out.push_back(ql[j][l]);
+  }
+  if (out.empty())
+    throw std::invalid_argument("hri.start_tilt: no safe configuration holds the cup that close to vertical");
+  start_lib_q = std::move(out);
+}
+
 void ArmModel::build_spec() {
   EnvSpec& s = spec;
-  s.name = arm_task_name(config.task);
+  s.name = arm_task_name(config.task) + (rows.has(ArmRowKind::Upright) ? "-upright" : "");
   s.obs_dim = obs_dim;
   s.act_dim = kArmJoints;
   s.dt = config.dt;
@@ -257,8 +292,10 @@ void ArmModel::build_spec() {
       s.constraint_names.push_back("human_" + robot.poi[i].name);
       s.constraint_tolerance.push_back(config.hri.human.tolerance[size_t(i)]);
     }
-    s.constraint_names.push_back("cup_upright");
-    s.constraint_tolerance.push_back(config.hri.upright.tolerance[0]);
+    if (rows.has(ArmRowKind::Upright)) {
+      s.constraint_names.push_back("cup_upright");
+      s.constraint_tolerance.push_back(config.hri.upright.tolerance[0]);
+    }
   }
   s.cost_events = {"collision", "joint_limit_violation"};  // HRI's human contact is a collision too
   s.info_names = {"collision", "joint_limit_violation", "final_distance", "distance",
@@ -267,9 +304,12 @@ void ArmModel::build_spec() {
                    InfoReduce::Mean, InfoReduce::Mean, InfoReduce::Sum,  InfoReduce::Sum};
   if (hri()) {
     // human_collision: steps in contact with the human (an episode ends there);
-    // spill: 1 for an episode with a spill; min_human_distance: per episode.
-    s.info_names.insert(s.info_names.end(), {"human_collision", "spill", "min_human_distance", "tilt"});
-    s.info_reduce.insert(s.info_reduce.end(), {InfoReduce::Sum, InfoReduce::Sum, InfoReduce::Last, InfoReduce::Mean});
+    // spill, spill_<deg>: 1 for an episode with a spill at either angle;
+    // min_human_distance: per episode.
+    s.info_names.insert(s.info_names.end(), {"human_collision", "spill", "min_human_distance", "tilt",
+                                             config.hri.strict_spill_name()});
+    s.info_reduce.insert(s.info_reduce.end(),
+                         {InfoReduce::Sum, InfoReduce::Sum, InfoReduce::Last, InfoReduce::Mean, InfoReduce::Sum});
   }
   s.target = config.target;
   check_env_target(s);

@@ -47,6 +47,7 @@ enum ArmInfoCol : int {
   kInfoSpill,                        // 1 at the first step of an episode whose tilt exceeds spill_angle
   kInfoMinHumanDistance,             // smallest robot-to-human surface distance so far in the episode, m
   kInfoTilt,                         // cup tilt, rad
+  kInfoSpillStrict,                  // "spill_<deg>": as kInfoSpill at spill_angle_strict
   kInfoCountHri
 };
 
@@ -82,17 +83,31 @@ struct ArmModel {
   // sampled once from config.goal_library_seed (a property of the task).
   std::vector<double> goal_lib_q;                // (L x 7)
   std::vector<Eigen::Vector3d> goal_lib_p;       // (L) their grasping-frame positions
+  // HRI with upright starts (hri.start_tilt < pi): safe configurations that
+  // hold the cup within start_tilt of vertical, sampled once like the goal
+  // library; each reset jitters one and checks it against the episode's human.
+  std::vector<double> start_lib_q;               // (S x 7)
+  double cos_start_tilt = -1.0;                  // cos(hri.start_tilt)
   EnvSpec spec;
 
   bool hri() const { return config.task == ArmTask::Hri; }
+  bool upright_starts() const { return hri() && !start_lib_q.empty(); }
   bool in_goal_region(const Eigen::Vector3d& g) const;
   // Every row but the moving groups' (those depend on where the obstacle is)
   // within init_margin, for lane l of a kernel evaluation.
   bool static_rows_ok(const lanes::ArmKernelOut& o, int l) const;
+  // A place to start or to deliver to: static_rows_ok and, with upright
+  // starts, the cup (o.cup, written by arm_upright_row_lanes) within start_tilt.
+  bool pose_ok(const lanes::ArmKernelOut& o, int l) const;
+  bool cup_upright(const lanes::ArmKernelOut& o, int l) const {
+    return !(hri() && config.hri.start_tilt < kStartTiltUniform) || o.cup[2][l] >= cos_start_tilt;
+  }
+  static constexpr double kStartTiltUniform = 3.14159265358979323846;  // hri.start_tilt = pi: uniform starts
 
  private:
   void build_kernel_tables();
   void build_goal_library();
+  void build_start_library();
   void build_spec();
 };
 

@@ -66,13 +66,15 @@ ArmEval evaluate_reference(const ArmModel& m, const double* q, const HumanFkResu
   for (int i = 0; i < kArmPoi; ++i)
     ev.collision = ev.collision || check(fk.poi[i], fk.poi[i], robot.poi[i].radius, robot.poi[i].body_check);
   if (!m.hri()) return ev;
-  // Cup axis and upright row: u = R cup_axis, c = cos(theta_max - margin) - u_z,
+  // Cup axis and (hri-upright) the upright row: u = R cup_axis, c = cos(theta_max - margin) - u_z,
   // dc/dq_j = -(w_j x u)_z with w_j the grasping frame's angular Jacobian.
   ev.cup_axis = fk.grasp.R * m.config.hri.cup_axis;
   ev.tilt = std::acos(std::clamp(ev.cup_axis.z(), -1.0, 1.0));
-  ev.c(kRowUpright) = m.row_offset_hri[kArmPoi] - ev.cup_axis.z();
-  for (int j = 0; j < kArmJoints; ++j)
-    ev.J(kRowUpright, j) = -Eigen::Vector3d(fk.J_grasp_rot.col(j)).cross(ev.cup_axis).z();
+  if (m.rows.has(ArmRowKind::Upright)) {
+    ev.c(kRowUpright) = m.row_offset_hri[kArmPoi] - ev.cup_axis.z();
+    for (int j = 0; j < kArmJoints; ++j)
+      ev.J(kRowUpright, j) = -Eigen::Vector3d(fk.J_grasp_rot.col(j)).cross(ev.cup_axis).z();
+  }
   if (!human) {
     ev.c.segment(kRowHuman, kArmPoi).setConstant(-INFINITY);
     return ev;

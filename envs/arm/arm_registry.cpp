@@ -1,6 +1,7 @@
 // Registry hooks of the manipulation envs: "table" (TableEnv), "shelf"
-// (ShelfEnvSim) and "hri" (HRI-Sim). The task is fixed by the name; the JSON
-// holds everything else.
+// (ShelfEnvSim), "hri" (HRI-Sim, the paper's) and "hri-upright" (HRI-Sim with
+// a cup-upright constraint row, ours). The task is fixed by the name; the
+// JSON holds everything else.
 #include <stdexcept>
 
 #include "envs/arm/arm_env.hpp"
@@ -18,6 +19,22 @@ std::unique_ptr<BatchEnv> make_arm(ArmTask task, const nlohmann::json& config, i
 nlohmann::json table_env_default_config() { return default_arm_env_config(ArmTask::Table); }
 nlohmann::json shelf_env_default_config() { return default_arm_env_config(ArmTask::Shelf); }
 nlohmann::json hri_env_default_config() { return default_arm_env_config(ArmTask::Hri); }
+nlohmann::json hri_upright_env_default_config() {
+  ArmEnvConfig c = default_arm_env_config(ArmTask::Hri);
+  c.hri.upright_row = true;
+  return c;
+}
+
+nlohmann::json hri_upgrade_pre_issue30_config(const nlohmann::json& overrides) {
+  if (!overrides.is_object() || !overrides.contains("hri")) return overrides;
+  const nlohmann::json& h = overrides["hri"];
+  if (!h.is_object() || !h.contains("targets") || h.contains("upright_row")) return overrides;
+  nlohmann::json out = overrides;
+  out["hri"]["upright_row"] = true;
+  out["hri"]["start_tilt"] = 3.14159265358979323846;
+  if (out.contains("sdf") && out["sdf"].is_object() && !out["sdf"].contains("table")) out["sdf"]["table"] = "analytic";
+  return out;
+}
 
 std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs) {
   return make_arm(ArmTask::Table, config, num_envs);

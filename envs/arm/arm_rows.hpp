@@ -10,9 +10,9 @@
 //   upright   1    cos(theta_max - margin) - u_z(q)  [cup axis u]  -(w_j x u)_z       0
 //
 // TableEnv and ShelfEnvSim compose joint, scene, body, ground (k = 34);
-// HRI-Sim adds human and upright (k = 44, p = 1). The first 34 rows keep
-// their positions in every env, so the static rows' kernels, caches and
-// tests are shared.
+// HRI-Sim adds human (k = 43, p = 1), hri-upright also upright (k = 44). The
+// first 34 rows keep their positions in every env, so the static rows'
+// kernels, caches and tests are shared.
 //
 // Seam for learned distance fields ("distance to a static scene object"):
 // the scene group's d and grad d come from one function,
@@ -38,7 +38,7 @@ inline constexpr int kRowScene = 14;
 inline constexpr int kRowBody = 23;
 inline constexpr int kRowGround = 32;
 inline constexpr int kRowHuman = 34;                                 // when composed
-inline constexpr int kRowUpright = kRowHuman + kArmPoi;              // 43, when composed
+inline constexpr int kRowUpright = kRowHuman + kArmPoi;              // 43, when composed (hri-upright)
 inline constexpr int kArmMaxRows = kRowUpright + 1;                  // 44
 inline constexpr int kArmDynamicRows = kArmRows - kRowScene;         // q-dependent Jacobian rows of the static groups
 inline constexpr int kArmMaxDynamicRows = kArmMaxRows - kRowScene;   // 30
@@ -61,8 +61,9 @@ struct ArmRowLayout {
   int k = 0;
   int p = 0;  // moving groups = uncontrollable states of the projector
 
-  // The static groups, plus human and upright rows for the HRI task.
-  static ArmRowLayout compose(bool hri) {
+  // The static groups, plus the human rows for the HRI task and the upright
+  // row when asked for (hri-upright).
+  static ArmRowLayout compose(bool hri, bool upright = false) {
     ArmRowLayout l;
     auto add = [&](ArmRowKind kind, int n, bool moving = false) {
       l.groups.push_back({kind, l.k, n, moving, moving ? l.p++ : -1});
@@ -74,7 +75,7 @@ struct ArmRowLayout {
     add(ArmRowKind::Ground, 2);
     if (hri) {
       add(ArmRowKind::Human, kArmPoi, /*moving=*/true);
-      add(ArmRowKind::Upright, 1);
+      if (upright) add(ArmRowKind::Upright, 1);
     }
     return l;
   }

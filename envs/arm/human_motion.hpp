@@ -105,10 +105,11 @@ HumanMotionLibrary load_human_motion(const std::string& bin_path, const std::str
 // The project's library: data/human_motion.bin + data/human_motion.json.
 HumanMotionLibrary load_default_human_motion();
 
-// Playback for the envs. frames_per_step: library frames per env step (the
-// reference advances one frame every 2 env steps: 0.5).
+// Playback for the envs. frames_per_step: library frames per env step; 1 =
+// real time for a 30 Hz env (the reference advances one frame every 2 env
+// steps, 0.5: half the speeds of docs/human.md at 30 Hz).
 struct HumanReplayConfig {
-  double frames_per_step = 0.5;
+  double frames_per_step = 1.0;
   HumanSplit split = HumanSplit::Train;
 };
 

@@ -36,6 +36,17 @@ struct EnvTarget {
   bool defined() const { return distance == distance; }
 };
 
+// Info columns that count events, and the name their totals carry in the
+// rollout JSON and the run summaries: "<x>collision" -> "<x>collisions", and
+// HRI-Sim's per-episode spill flags "spill" / "spill_<deg>" -> "spills" /
+// "spills_<deg>"; "" for any other column.
+inline std::string event_total_name(const std::string& c) {
+  if (c.size() >= 9 && c.compare(c.size() - 9, 9, "collision") == 0) return c + "s";
+  if (c == "spill") return "spills";
+  if (c.rfind("spill_", 0) == 0) return "spills" + c.substr(5);
+  return "";
+}
+
 struct EnvSpec {
   std::string name;
   int obs_dim = 0;

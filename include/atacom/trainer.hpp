@@ -42,7 +42,8 @@ struct TrainConfig {
   int64_t seed = 0;
   int64_t steps = 100000;         // env transitions, all envs together (learning algorithms)
   int num_envs = 1;               // N parallel training envs
-  int64_t eval_every = 10000;     // env steps between evaluations (and at the end)
+  int64_t eval_every = 10000;     // env steps between evaluations (and at the end); a config that does
+                                  // not set it gets default_eval_every(steps)
   int eval_episodes = 10;         // run in parallel, one env each
   bool eval_deterministic = true; // mean action (true) or sampled (false)
   int64_t checkpoint_every = 0;   // env steps between checkpoints; 0: at every evaluation
@@ -54,6 +55,10 @@ struct TrainConfig {
 };
 // The one default factory.
 TrainConfig default_train_config();
+// train.eval_every when a config leaves it out: 1000 for runs under 50k env
+// steps (a 20k run gets a 20-point curve instead of 2), else 10000, the
+// paper's interval (200 points over its 2M-step runs).
+int64_t default_eval_every(int64_t steps);
 void to_json(nlohmann::json& j, const TrainConfig& c);
 void from_json(const nlohmann::json& j, TrainConfig& c);  // unknown keys and bad values rejected
 
@@ -163,9 +168,7 @@ inline std::unique_ptr<TrainedPolicy> load_run_policy(const std::string& run_dir
 std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector<std::string>& learner_columns);
 
 // Hand-written SVG line chart of eval return (mean +- std band) vs env steps.
-// `color`: the algorithm's (train/algorithms.hpp, algorithm_color).
 std::string learning_curve_svg(const std::string& title, const std::vector<double>& steps,
-                               const std::vector<double>& mean, const std::vector<double>& std,
-                               const std::string& color = "#0072B2");
+                               const std::vector<double>& mean, const std::vector<double>& std);
 
 }  // namespace atacom

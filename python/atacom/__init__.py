@@ -11,13 +11,26 @@ function for your own systems:
 
     r = atacom.project(f, G, J_q, c, alpha)     # r.a, r.s, r.lambda_, r.status
 
+    policy = atacom.load_policy("runs/table")  # a training run's policy: policy(obs) -> actions
+
+With Gymnasium importable, every env is also registered with it:
+gymnasium.make_vec("atacom/Table-v0", num_envs=64) and gymnasium.make("atacom/Table-v0").
+
 Data files (robot models) are found next to this package (data/), or in
 ATACOM_DATA_DIR when that is set.
 """
 import json as _json
 import os as _os
 
-from . import _core
+from ._build_check import check_numpy as _check_numpy
+
+_check_numpy()  # a python3 without NumPy: name it and the one the module was built for
+try:
+    from . import _core
+except ImportError as _e:  # the extension is missing or was built for another Python: say which
+    from ._build_check import import_error as _import_error
+
+    raise _import_error(_e) from None
 
 _DATA = _os.path.join(_os.path.dirname(_os.path.abspath(__file__)), "data")
 if _os.path.isdir(_DATA):
@@ -28,6 +41,10 @@ from .projector import STATUS_FLAGS, Projector, ProjectResult, project, status_f
 from .safelayer import SafeLayerResult, safelayer  # noqa: E402
 from .spaces import HAVE_GYMNASIUM, Box  # noqa: E402
 from .vector_env import AtacomVectorEnv, AutoresetMode, make_vec  # noqa: E402
+from .policy import LoadedPolicy, load_policy  # noqa: E402
+from .gym_registration import env_id as gymnasium_id, register_envs as _register_envs  # noqa: E402
+
+GYMNASIUM_IDS = _register_envs()  # "atacom/Table-v0", ... when Gymnasium is importable, else []
 
 
 def default_config(env):
@@ -41,7 +58,8 @@ def safety_layers():
 
 
 __all__ = [
-    "AtacomVectorEnv", "AutoresetMode", "Box", "HAVE_GYMNASIUM", "ProjectResult", "Projector", "RandomStreams",
-    "STATUS_FLAGS", "SafeLayerResult", "data_dir", "default_config", "env_names", "make_vec", "num_threads", "project", "safelayer",
-    "safety_layers", "set_num_threads", "status_flags",
+    "AtacomVectorEnv", "AutoresetMode", "Box", "GYMNASIUM_IDS", "HAVE_GYMNASIUM", "LoadedPolicy", "ProjectResult",
+    "Projector", "RandomStreams", "STATUS_FLAGS", "SafeLayerResult", "data_dir", "default_config", "env_names",
+    "gymnasium_id", "load_policy", "make_vec", "num_threads", "project", "safelayer", "safety_layers",
+    "set_num_threads", "status_flags",
 ]

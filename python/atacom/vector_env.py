@@ -390,7 +390,7 @@ def make_vec(env, num_envs, seed=0, safety="atacom", config=None, autoreset_mode
 
     env: "table", "shelf", "nav", "pendulum", ... (atacom.env_names()).
     safety: "atacom" (the projector between the agent and the env), "none",
-    or "safelayer" (once that layer exists; the error says so).
+    or "safelayer" (SafeLayer's one-step QP); atacom.safety_layers() lists them.
     config: overrides of the env's defaults (atacom.default_config(env));
     unknown keys are rejected with the known ones listed.
     autoreset_mode: "same_step" (the C++ envs' own: the step that ends an

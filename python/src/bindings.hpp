@@ -24,6 +24,7 @@ void bind_env(py::module_& m);
 void bind_projector(py::module_& m);
 void bind_safelayer(py::module_& m);
 void bind_misc(py::module_& m);
+void bind_policy(py::module_& m);
 
 // A NumPy array over memory owned by `owner` (kept alive as the array's base).
 // Read-only unless `writeable`: envs own their buffers and rewrite them each step.

@@ -43,4 +43,5 @@ PYBIND11_MODULE(_core, m) {
   atacom::py_bindings::bind_env(m);
   atacom::py_bindings::bind_projector(m);
   atacom::py_bindings::bind_safelayer(m);
+  atacom::py_bindings::bind_policy(m);
 }

@@ -12,7 +12,7 @@ def table():
 
 
 @pytest.mark.parametrize("kwargs,exc,pattern", [
-    (dict(env="tabel"), ValueError, r"unknown env 'tabel' \(known: table, shelf, nav, hri, pendulum"),
+    (dict(env="tabel"), ValueError, r"unknown env 'tabel' \(known: table, shelf, nav, hri, hri-upright, pendulum"),
     (dict(env=3), TypeError, "env must be a name"),
     (dict(env="table", safety="atacomm"), ValueError, r"unknown safety layer 'atacomm' \(known: none, atacom"),
     (dict(env="pendulum", safety="atacom"), ValueError, "no constraint model"),

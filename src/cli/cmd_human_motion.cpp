@@ -1,4 +1,5 @@
-// atacom human-motion: regenerate the human's motion library (docs/human.md).
+// atacom human-motion: regenerate the human's motion library, or print the
+// shipped library's speed statistics (--stats; docs/human.md).
 #include <iostream>
 
 #include "cli/command.hpp"
@@ -6,6 +7,7 @@
 #include "src/core/limits.hpp"
 #include "envs/arm/human_model.hpp"
 #include "envs/arm/human_motion.hpp"
+#include "envs/arm/human_motion_stats.hpp"
 
 namespace atacom::cli {
 namespace {
@@ -18,17 +20,29 @@ std::string manifest_path(const std::string& bin) {
 }
 
 const RegisterCommand reg{{"human-motion",
-                           "generate the human motion library (frames FILE, manifest FILE with .json)",
+                           "generate the human motion library (frames FILE, manifest FILE with .json), or --stats",
                            [](CLI::App& app) {
                              auto seed = std::make_shared<uint64_t>(default_human_motion_config().seed);
                              auto frames = std::make_shared<int>(default_human_motion_config().frames);
                              auto out = std::make_shared<std::string>();
+                             auto stats = std::make_shared<bool>(false);
                              add_integer_flag(app, "--seed", *seed, seed_range<uint64_t>(),
                                               "generator seed (the project's library: 2023)");
                              add_integer_flag(app, "--frames", *frames, range::closed(100, 1000000),
                                               "at least this many frames at 30 Hz");
-                             app.add_option("--out", *out, "frames file, e.g. data/human_motion.bin")->required();
+                             auto* o_out = app.add_option("--out", *out, "frames file, e.g. data/human_motion.bin");
+                             app.add_flag("--stats", *stats,
+                                          "print the shipped library's speed percentiles (pelvis, wrist, hand; JSON) "
+                                          "instead of generating")
+                                 ->excludes(o_out);
                              return [=]() {
+                               if (*stats) {
+                                 std::cout << human_motion_speed_stats(load_default_human_motion(), load_human_model())
+                                                  .dump(2)
+                                           << "\n";
+                                 return 0;
+                               }
+                               if (out->empty()) throw std::invalid_argument("human-motion: --out FILE is required (or --stats)");
                                HumanMotionConfig c = default_human_motion_config();
                                c.seed = *seed;
                                c.frames = *frames;

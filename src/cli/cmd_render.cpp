@@ -2,6 +2,8 @@
 #include <fstream>
 #include <iostream>
 
+#include "atacom/env_registry.hpp"
+#include "atacom/safety_layer.hpp"
 #include "cli/command.hpp"
 #include "cli/flag_checks.hpp"
 #include "src/core/limits.hpp"
@@ -20,7 +22,8 @@ const RegisterCommand reg{
     {"render", "draw one episode as a self-contained HTML page (animated SVG, slider, constraint and reward plots)",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<RenderArgs>();
-       app.add_option("--env", a->cfg.env, "table | shelf | nav | hri (required unless --policy trained)");
+       app.add_option("--env", a->cfg.env, "table | shelf | nav | hri (required unless --policy trained)")
+           ->check(CLI::IsMember(env_names()));
        app.add_option("--policy", a->cfg.policy, "random | zero | la (the env's linear attractor) | trained (with --run)")
            ->check(CLI::IsMember({"random", "zero", "la", "trained"}));
        app.add_option("--run", a->cfg.run_dir, "training run directory (--policy trained)");
@@ -28,7 +31,8 @@ const RegisterCommand reg{
            ->check(CLI::IsMember({"final", "best"}));
        app.add_option("--safety", a->safety,
                       safety_choices() + ": the layer between policy and env (default atacom; with --policy "
-                      "trained the run's)");
+                      "trained the run's)")
+           ->check(CLI::IsMember(safety_layer_names()));
        add_integer_flag(app, "--seed", a->cfg.seed, seed_range<decltype(a->cfg.seed)>(), "seed of the env and the policy");
        app.add_option("--config", a->config_file, "JSON file with env config overrides");
        app.add_option("--out", a->out, "the HTML file to write")->required();

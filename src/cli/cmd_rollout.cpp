@@ -1,6 +1,8 @@
 // atacom rollout: check a safety setup (or a trained policy) before training.
 #include <iostream>
 
+#include "atacom/env_registry.hpp"
+#include "atacom/safety_layer.hpp"
 #include "cli/command.hpp"
 #include "cli/flag_checks.hpp"
 #include "cli/json_file.hpp"
@@ -47,7 +49,11 @@ atacom::cli::RegisterCommand reg(
      "collisions and violations",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<RolloutArgs>();
-       app.add_option("--env", a->cfg.env, "environment name (required unless --policy trained)");
+       app.add_option("--env", a->cfg.env, "env: " + [] {
+         std::string s;
+         for (const std::string& n : atacom::env_names()) s += (s.empty() ? "" : ", ") + n;
+         return s;
+       }() + " (required unless --policy trained)");
        app.add_option("--policy", a->cfg.policy, "random | zero | la (the env's linear attractor) | trained (with --run)")
            ->check(CLI::IsMember({"random", "zero", "la", "trained"}));
        app.add_option("--run", a->cfg.run_dir, "training run directory (--policy trained)");

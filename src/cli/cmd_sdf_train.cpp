@@ -1,5 +1,6 @@
 // atacom sdf-train: train a learned distance field (ReDSDF) of an object from
 // its exact geometry and write the weights with a manifest.
+#include <cstdio>
 #include <iostream>
 
 #include "cli/command.hpp"
@@ -31,6 +32,25 @@ std::vector<int> parse_widths(const std::string& s) {
     i = j + 1;
   }
   return w;
+}
+
+// --help's defaults: each object's training config (default_sdf_train_config), the values the flags override.
+std::string defaults_footer() {
+  std::string f = "\nDefaults per --object (a flag or --config overrides them):\n";
+  for (const char* obj : {"table", "shelf", "human", "tiago"}) {
+    const atacom::SdfTrainConfig c = atacom::default_sdf_train_config(obj);
+    std::string hidden;
+    for (int w : c.arch.hidden) hidden += (hidden.empty() ? "" : ",") + std::to_string(w);
+    char b[320];
+    std::snprintf(b, sizeof b,
+                  "  %-6s --hidden %s --epochs %d --patience %d --surface-points %d --batch %d --lr %g "
+                  "--align-weight %g --budget-s %g --seed %llu --data-seed %llu\n",
+                  obj, hidden.c_str(), c.max_epochs, c.patience, c.data.surface_points, c.batch, c.lr,
+                  c.align_weight, c.budget_s, static_cast<unsigned long long>(c.init_seed),
+                  static_cast<unsigned long long>(c.data.seed));
+    f += b;
+  }
+  return f;
 }
 
 int run(SdfTrainArgs& a) {
@@ -68,9 +88,9 @@ atacom::cli::RegisterCommand reg(
     {"sdf-train", "train a learned signed distance field (ReDSDF) of an object from its exact geometry",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<SdfTrainArgs>();
-       app.add_option("--object", a->object, "table | shelf | human | tiago")
+       app.add_option("--object", a->object, "table | shelf | hri_table (HRI-Sim's table) | human | tiago")
            ->required()
-           ->check(CLI::IsMember({"table", "shelf", "human", "tiago"}));
+           ->check(CLI::IsMember({"table", "shelf", "hri_table", "human", "tiago"}));
        app.add_option("--out", a->out, "output directory (weights, manifest, progress.csv, learning curve)")->required();
        app.add_option("--config", a->config_file, "JSON overrides of the training config (see docs/sdf.md)");
        app.add_option("--hidden", a->hidden, "hidden widths, trunk first, e.g. 64,64,64,64");
@@ -88,6 +108,10 @@ atacom::cli::RegisterCommand reg(
        app.add_option("--seed", a->seed, "weight init and batch order seed")->check(CLI::NonNegativeNumber);
        app.add_option("--data-seed", a->data_seed, "data sampling seed")->check(CLI::NonNegativeNumber);
        app.add_flag("--quiet", a->quiet, "no progress lines");
+       // The numeric flags default to the object's config (below), not to the placeholders they hold.
+       for (CLI::Option* o : app.get_options())
+         if (o->get_name() != "--help" && o->get_expected_min() > 0) o->default_str("");
+       app.footer(std::function<std::string()>(defaults_footer));  // built when --help asks (it loads the human model)
        return [a, &app] {
          // The command as given (recorded in the manifest).
          std::string line = "atacom sdf-train";

@@ -40,7 +40,8 @@ int run_status(const std::string& dir) {
 int run(const SweepArgs& a) {
   if (a.status->parsed()) return run_status(a.status_dir);
   if (a.spec.empty()) throw std::invalid_argument("atacom sweep: SPEC (a sweep spec JSON file) is required");
-  if (a.out.empty()) throw std::invalid_argument("atacom sweep: --out DIR is required");
+  if (a.out.empty() && !a.dry_run)
+    throw std::invalid_argument("atacom sweep: --out DIR is required (or --dry-run to list the runs and their cost)");
   const SweepSpec spec = parse_sweep_spec(atacom::read_json_file(a.spec, "sweep spec"));
   if (!a.slurm)
     for (const CLI::Option* opt : a.slurm_opts)
@@ -73,11 +74,16 @@ const RegisterCommand reg{Command{
       auto a = std::make_shared<SweepArgs>();
       app.add_option("SPEC", a->spec, "sweep spec (JSON: envs, algos, seeds, steps, num_envs, overrides)");
       app.add_option("--out", a->out, "sweep directory (runs/, logs/, sweep.json; reuse it to resume)");
-      app.add_option("--jobs", a->jobs, "runs at a time (default: one per core)")->check(CLI::Range(1, 4096));
+      app.add_option("--jobs", a->jobs, "runs at a time (default: one per core)")
+          ->check(CLI::Range(1, 4096))
+          ->default_str(std::to_string(default_sweep_jobs()));
       app.add_option("--threads-per-run", a->threads_per_run, "worker threads of each run (default: cores / jobs)")
-          ->check(CLI::Range(1, 4096));
+          ->check(CLI::Range(1, 4096))
+          ->default_str("");
       app.add_option("--shard", a->shard, "run only part i of n (cells k with k mod n = i), e.g. 0/4");
-      app.add_flag("--dry-run", a->dry_run, "list the runs (and their commands) without running anything");
+      app.add_flag("--dry-run", a->dry_run,
+                   "list the runs and an estimated cost (from measured steps/s, data/sweep_rates.json) without "
+                   "running or writing anything; with --out also each run's state and command");
       app.add_flag("--slurm", a->slurm, "submit the runs that are not done as Slurm job arrays (docs/sweeps.md)");
       a->slurm_opts = {
           app.add_option("--partition", a->so.partition, "Slurm partition"),
@@ -86,8 +92,9 @@ const RegisterCommand reg{Command{
               ->check(CLI::Range(1, 4096)),
           app.add_option("--mem", a->so.mem, "Slurm memory per node (e.g. 4G)"),
           app.add_option("--account", a->so.account, "Slurm account"),
-          app.add_option("--max-parallel", a->so.max_parallel, "tasks running at once (--array=0-N%K)")
-              ->check(CLI::Range(1, 1000000)),
+          app.add_option("--max-parallel", a->so.max_parallel, "tasks running at once (--array=0-N%K; default: no limit)")
+              ->check(CLI::Range(1, 1000000))
+              ->default_str(""),
           app.add_option("--sbatch-arg", a->so.sbatch_args, "extra sbatch option, one per flag (repeatable)"),
           app.add_option("--runs-per-task", a->so.runs_per_task, "runs per array task")->check(CLI::Range(1, 100000)),
           app.add_option("--presignal", a->so.presignal_s,

@@ -17,6 +17,7 @@
 #include "cli/json_file.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/core/limits.hpp"
+#include "atacom/env_registry.hpp"
 #include "train/algorithms.hpp"
 #include "train/presets.hpp"
 
@@ -30,15 +31,18 @@ struct TrainArgs {
   std::string env, algo, config, out, sdf, preset;
   int64_t seed = 0, steps = 0;
   int envs = 0, eval_episodes = 0;
-  bool resume = false, stop_at_target = false;
+  bool resume = false, stop_at_target = false, print_config = false;
   CLI::Option *o_env = nullptr, *o_algo = nullptr, *o_seed = nullptr, *o_steps = nullptr, *o_envs = nullptr,
               *o_eval = nullptr;
 };
 
-int run(const TrainArgs& a) {
+// The run's config as the flags, --config and the defaults resolve it (what
+// --print-config prints and what the run uses).
+RunConfig resolve(const TrainArgs& a) {
   RunConfig rc;
   const std::filesystem::path dir(a.out), saved = dir / "config.json";
   if (a.resume) {
+    if (a.out.empty()) throw std::invalid_argument("--resume needs --out DIR (the run to continue)");
     if (!std::filesystem::exists(dir))
       throw std::invalid_argument("--resume: run directory '" + a.out + "' does not exist");
     if (!std::filesystem::exists(saved))
@@ -86,6 +90,16 @@ int run(const TrainArgs& a) {
     }
     rc = resolve_run_config(file);
   }
+  return rc;
+}
+
+int run(const TrainArgs& a) {
+  const RunConfig rc = resolve(a);
+  if (a.print_config) {
+    std::cout << run_config_json(rc).dump(2) << std::endl;
+    return 0;
+  }
+  if (a.out.empty()) throw std::invalid_argument("--out is required (the run directory; or --print-config)");
   TrainOptions opts;
   opts.out_dir = a.out;
   opts.resume = a.resume;
@@ -105,32 +119,52 @@ int run(const TrainArgs& a) {
   return 0;
 }
 
+std::string join_names(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 std::string algo_help() {
-  std::string h = "algorithm: action source x safety layer (";
-  bool first = true;
-  for (const std::string& n : algorithm_names()) {
-    h += (first ? "" : ", ") + n;
-    first = false;
-  }
-  return h + "); la, random, zero and their variants evaluate only";
+  return "algorithm, an action source x a safety layer: " + join_names(algorithm_names()) +
+         "; la, random, zero and their variants evaluate only (train.algo)";
+}
+
+std::string train_footer() {
+  return "\nWhat a run writes (DIR/progress.csv columns, DIR/summary.json keys):\n"
+         "  cost (info[\"cost\"], per step): max(0, max_i c_i), the largest constraint value, 0 when every row\n"
+         "    is satisfied (c_i <= 0 is safe).\n"
+         "  eval_max_constraint: the largest constraint value of any step of the evaluation's episodes.\n"
+         "  eval_episode_max_constraint: each episode's largest constraint value, averaged over the episodes.\n"
+         "  violations: steps per episode with a row above its tolerance; train_violations: the running total.\n"
+         "The full config a run uses: atacom train ... --print-config (docs/training.md lists the keys).";
 }
 
 const RegisterCommand reg{Command{
     "train", "train (or, for hand-coded policies, evaluate) an algorithm on a registered env, with checkpoints and resume",
     [](CLI::App& app) -> std::function<int()> {
       auto a = std::make_shared<TrainArgs>();
-      a->o_env = app.add_option("--env", a->env, "env name (see the registry)");
+      // The defaults shown are the train section's (default_train_config); a --config file's train section
+      // overrides them, and these flags override the file.
+      const TrainConfig d = default_train_config();
+      a->env = d.env;
+      a->algo = d.algo;
+      a->seed = d.seed;
+      a->steps = d.steps;
+      a->envs = d.num_envs;
+      a->eval_episodes = d.eval_episodes;
+      a->o_env = app.add_option("--env", a->env, "env: " + join_names(env_names()) + " (train.env)");
       a->o_algo = app.add_option("--algo", a->algo, algo_help());
-      // Defaults of these come from the config (docs/training.md), so help names the key instead.
-      a->o_seed = add_integer_flag(app, "--seed", a->seed, seed_range<int64_t>(), "random seed (default: train.seed)");
+      a->o_seed = add_integer_flag(app, "--seed", a->seed, seed_range<int64_t>(), "random seed (train.seed)");
       a->o_steps = add_integer_flag(app, "--steps", a->steps, range::closed<int64_t>(1, limits::kMaxSteps),
-                                    "env transitions to train for, all envs together (default: train.steps)");
+                                    "env transitions to train for, all envs together (train.steps); evaluation "
+                                    "every train.eval_every steps: 1000 under 50k steps, else 10000, unless set");
       a->o_envs = add_integer_flag(app, "--envs", a->envs, range::closed(1, limits::kMaxEnvs),
-                                   "parallel training envs N (default: train.num_envs)");
+                                   "parallel training envs N (train.num_envs)");
       a->o_eval = add_integer_flag(app, "--eval-episodes", a->eval_episodes, range::closed(1, limits::kMaxEvalEpisodes),
-                                   "episodes per evaluation (default: train.eval_episodes)");
-      for (CLI::Option* o : {a->o_seed, a->o_steps, a->o_envs, a->o_eval}) o->default_str("");
-      app.add_option("--config", a->config, "JSON file with env/<learner>/<layer>/train sections overriding the preset");
+                                   "episodes per evaluation (train.eval_episodes)");
+      app.add_option("--config", a->config, "JSON file with env/<learner>/<layer>/train sections overriding the "
+                                            "preset (see --print-config for every key)");
       std::string presets;
       for (const std::string& p : preset_names()) presets += (presets.empty() ? "" : " | ") + p;
       app.add_option("--preset", a->preset,
@@ -139,10 +173,14 @@ const RegisterCommand reg{Command{
           ->check(CLI::IsMember(preset_names()));
       app.add_option("--sdf", a->sdf, "analytic | learned: the distance fields of every object with a shipped model")
           ->check(CLI::IsMember({"analytic", "learned"}));
-      app.add_option("--out", a->out, "run directory (must be empty unless --resume)")->required();
+      app.add_option("--out", a->out, "run directory (must be empty unless --resume); required unless --print-config");
       app.add_flag("--resume", a->resume, "continue the run in --out from its last checkpoint");
       app.add_flag("--stop-at-target", a->stop_at_target,
                    "end the run at the first evaluation that meets the env's quality target (train.stop_at_target)");
+      app.add_flag("--print-config", a->print_config,
+                   "print the resolved config (every key of every section, defaults filled in: what config.json "
+                   "will hold) and exit");
+      app.footer(train_footer());
       return [a]() { return run(*a); };
     }}};
 

@@ -47,7 +47,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
+    // --help exits 0; every usage error (unknown flag, bad value, missing
+    // option: CLI11's codes 105, 106, 109, ...) exits 2, like the errors
+    // the subcommands find themselves.
+    const int rc = app.exit(e) == 0 ? 0 : 2;
     return stdout_written() ? rc : 2;
   }
   int rc = 1;

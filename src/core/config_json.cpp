@@ -32,6 +32,14 @@ std::string value_text(const nlohmann::json& v, size_t max_bytes) {
   return printable_text(v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), max_bytes);
 }
 
+std::string unknown_key_message(const std::string& key_path, const std::string& section,
+                                const std::vector<std::string>& valid) {
+  std::string list;
+  for (const std::string& k : valid) list += (list.empty() ? "" : ", ") + printable_text(k);
+  return "unknown config key '" + printable_text(key_path) + "' (valid keys of '" + printable_text(section) +
+         "': " + (list.empty() ? "none" : list) + ")";
+}
+
 nlohmann::json parse_json_strict(std::string_view text, const std::string& what) {
   using json = nlohmann::json;
   // One frame per open object or array: the keys seen so far (objects only)

@@ -16,6 +16,7 @@
 // and absurd nesting are rejected, and no raw input byte ever reaches an
 // error message (they are escaped as \xNN).
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <limits>
@@ -57,6 +58,12 @@ nlohmann::json parse_json_strict(std::string_view text, const std::string& what)
 // unreadable or oversized file.
 constexpr size_t kMaxConfigFileBytes = size_t{64} << 20;
 nlohmann::json read_json_file(const std::string& path, const std::string& what = "config file");
+
+// "unknown config key 'train.stepz' (valid keys of 'train': env, algo, seed, ...)":
+// the one message for a key a section does not have. `key_path` is the full
+// dotted path, `section` the section's own; `valid` in the order to list them.
+std::string unknown_key_message(const std::string& key_path, const std::string& section,
+                                const std::vector<std::string>& valid);
 
 // ---------------------------------------------------------------- values
 
@@ -126,8 +133,7 @@ class ConfigReader {
     if constexpr (std::is_arithmetic_v<V> && !std::is_same_v<V, bool>) {
       get(key, v, range::all<V>());
     } else {
-      if (!j_.contains(key)) return;
-      seen_.insert(key);
+      if (!asked(key)) return;
       const nlohmann::json& x = j_.at(key);
       try {
         check_type(x, v);
@@ -141,14 +147,12 @@ class ConfigReader {
   template <class V, class R>
   void get(const char* key, V& v, const Range<R>& r) {
     static_assert(std::is_arithmetic_v<V> && std::is_same_v<V, R>, "range type must match the value type");
-    if (!j_.contains(key)) return;
-    seen_.insert(key);
+    if (!asked(key)) return;
     v = checked_number<V>(j_.at(key), name(key), r);
   }
   // Optional list of integers, each inside `r`, with min_len..max_len entries.
   void get(const char* key, std::vector<int>& v, const Range<int>& r, size_t min_len, size_t max_len) {
-    if (!j_.contains(key)) return;
-    seen_.insert(key);
+    if (!asked(key)) return;
     const nlohmann::json& x = j_.at(key);
     if (!x.is_array() || x.size() < min_len || x.size() > max_len)
       throw std::invalid_argument(name(key) + " must be a list of " + std::to_string(min_len) + " to " +
@@ -161,15 +165,13 @@ class ConfigReader {
 
   // A nested section handled by its own from_json.
   const nlohmann::json* sub(const char* key) {
-    if (!j_.contains(key)) return nullptr;
-    seen_.insert(key);
+    if (!asked(key)) return nullptr;
     return &j_.at(key);
   }
 
   // Required keys: missing ones are errors. number() also rejects NaN/Inf.
   const nlohmann::json& at(const std::string& key) {
-    seen_.insert(key);
-    if (!j_.contains(key)) throw std::invalid_argument("missing config key '" + path(key) + "'");
+    if (!asked(key)) throw std::invalid_argument("missing config key '" + path(key) + "'");
     return j_.at(key);
   }
   double number(const std::string& key, const Range<double>& r = range::finite()) {
@@ -190,11 +192,10 @@ class ConfigReader {
   // "config key 'section.key'": how messages name a key.
   std::string name(const std::string& key) const { return "config key '" + path(key) + "'"; }
 
-  // Call last: rejects keys nobody asked for.
+  // Call last: rejects keys nobody asked for, listing the ones the section has.
   void finish() const {
     for (auto it = j_.begin(); it != j_.end(); ++it)
-      if (!seen_.count(it.key()))
-        throw std::invalid_argument("unknown config key '" + section_ + "." + printable_text(it.key()) + "'");
+      if (!seen_.count(it.key())) throw std::invalid_argument(unknown_key_message(path(it.key()), section_, known_));
   }
 
  private:
@@ -212,10 +213,18 @@ class ConfigReader {
     }
   }
   [[noreturn]] static void throw_type() { throw nlohmann::json::type_error::create(302, "type", nullptr); }
+  // Records `key` as one the section knows; true when the config holds it.
+  bool asked(const std::string& key) {
+    if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.push_back(key);
+    if (!j_.contains(key)) return false;
+    seen_.insert(key);
+    return true;
+  }
 
   const nlohmann::json& j_;
   std::string section_;
-  std::set<std::string> seen_;
+  std::set<std::string> seen_;      // keys taken from the config
+  std::vector<std::string> known_;  // every key asked for, in order (the valid keys of the section)
 };
 
 }  // namespace atacom

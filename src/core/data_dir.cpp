@@ -23,6 +23,14 @@ std::string data_dir() {
   const char* env = std::getenv("ATACOM_DATA_DIR");
   if (env != nullptr && env[0] != '\0') return env;
   if (!runtime_data_dir().empty()) return runtime_data_dir();
+  std::error_code ec;
+  if (std::filesystem::is_directory(ATACOM_DEFAULT_DATA_DIR, ec)) return ATACOM_DEFAULT_DATA_DIR;
+  // An installed binary whose source tree is gone: the data `cmake --install` put beside it.
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const std::filesystem::path installed = exe.parent_path().parent_path() / "share" / "atacom" / "data";
+    if (std::filesystem::is_directory(installed, ec)) return installed.string();
+  }
   return ATACOM_DEFAULT_DATA_DIR;
 }
 

@@ -18,8 +18,10 @@
 // so the gradient is a convex combination of the primitives' gradients and
 // both neighbours slow the arm down near a seam. Error bound, M primitives:
 //     min_j d_j - (M - 1) k / 4  <=  d_union  <=  min_j d_j,
-// and d_union == min_j d_j wherever the nearest primitive is at least k
-// nearer than all others. The smooth value never exceeds the exact one, so a
+// and d_union == min_j d_j wherever the nearest primitive is at least
+// (M + 2) k / 4 nearer than all others (k when M = 2: the primitives folded
+// before the nearest one lower the running value by up to k / 4 each, and a
+// pair step is exact once its two values differ by k). The smooth value never exceeds the exact one, so a
 // constraint delta - d_union <= 0 still implies delta - min_j d_j <= 0. With
 // blend == 0 the union is the exact min with the nearest primitive's gradient.
 #pragma once

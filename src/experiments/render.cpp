@@ -82,17 +82,20 @@ Box3 extent(const RenderScene& s, const std::vector<RenderFrame>& frames) {
 }
 
 // [lo, hi] widened to multiples of a 1-2-5 step with `ticks` intervals.
+// [lo, hi] rounded out to a multiple of a round step (1, 2, 2.5 or 5 x 10^k)
+// with `ticks` to `ticks + 2` steps: the tightest such range that covers it.
 void nice_range(double& lo, double& hi, int ticks) {
   if (!(hi > lo)) hi = lo + 1.0;
-  const double raw = (hi - lo) / ticks, mag = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
-    if (m * mag >= raw * (1 - 1e-9)) {
-      step = m * mag;
-      if (std::floor(lo / step) * step + ticks * step >= hi) break;
-    }
-  lo = std::floor(lo / step + 1e-9) * step;
-  hi = lo + ticks * step;
+  const double raw = (hi - lo) / (ticks + 2);
+  double best_lo = lo, best_hi = hi, best_span = INFINITY;
+  for (double mag = std::pow(10.0, std::floor(std::log10(raw))), decade = 0; decade < 3; mag *= 10, ++decade)
+    for (double m : {1.0, 2.0, 2.5, 5.0})
+      for (int n = ticks; n <= ticks + 2; ++n) {
+        const double step = m * mag, l = std::floor(lo / step + 1e-9) * step, h = l + n * step;
+        if (h >= hi - 1e-12 * step && h - l < best_span) best_lo = l, best_hi = h, best_span = h - l;
+      }
+  lo = best_lo;
+  hi = best_hi;
 }
 
 constexpr int kPlotTicksX = 10, kPlotTicksY = 4, kPlotWidth = 900, kPlotMargin = 52;
@@ -120,6 +123,22 @@ std::string time_plot(const std::vector<std::vector<double>>& series, const std:
   if (const size_t p = s.find(ns); p != std::string::npos) s.erase(p, ns.size());
   return s;
 }
+
+}  // namespace
+
+std::pair<double, double> constraint_plot_range(const std::vector<std::vector<double>>& rows) {
+  double lo = 0.0, hi = 0.0;
+  for (const auto& r : rows)
+    for (double x : r)
+      if (std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
+  const double pad = 0.05 * std::max(hi - lo, 1e-3);
+  lo -= pad;
+  hi += pad;
+  nice_range(lo, hi, kPlotTicksY);
+  return {lo, hi};
+}
+
+namespace {
 
 std::string fmt(const char* f, double x) {
   char buf[64];
@@ -231,14 +250,8 @@ RenderResult render_episode(const RenderConfig& cfg) {
                      {"collision", coll},
                      {"plot", {{"width", kPlotWidth}, {"margin", kPlotMargin}, {"x0", 0}, {"x1", steps_hi}}}};
 
-  // Plots: every row (thin) and their maximum (bold), clipped below at -0.5.
-  const double c_hi = std::max(0.05, res.max_constraint + 0.02);
-  double c_lo = 0.0;
-  for (const auto& r : rows)
-    for (double x : r) c_lo = std::min(c_lo, x);
-  c_lo = std::max(c_lo - 0.02, -0.5);
-  double c_hi_n = c_hi;
-  nice_range(c_lo, c_hi_n, kPlotTicksY);
+  // Plots: every row (thin) and their maximum (bold).
+  const auto [c_lo, c_hi_n] = constraint_plot_range(rows);
   std::vector<std::vector<double>> cs = rows;
   std::vector<std::string> colors(rows.size(), "#868e96");
   std::vector<double> widths(rows.size(), 0.8);

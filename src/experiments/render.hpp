@@ -6,6 +6,8 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -39,6 +41,11 @@ struct RenderResult {
 // for an unknown env or policy, a setting that does not apply, or an env
 // without a picture; std::runtime_error for an unreadable run.
 RenderResult render_episode(const RenderConfig& config);
+
+// The constraint plot's y range [lo, hi]: from the lowest value of any row
+// to the highest, always including the boundary c = 0, padded by 5 % of the
+// span and rounded out to tick steps (non-finite values ignored).
+std::pair<double, double> constraint_plot_range(const std::vector<std::vector<double>>& rows);
 
 // The page around the episode's data (render_page.cpp): title, the data JSON
 // (one object, see render.cpp), the two plot SVGs.

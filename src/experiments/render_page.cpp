@@ -175,7 +175,7 @@ const char* kScript = R"JS(
   slider.addEventListener('input', () => draw(+slider.value));
   let timer = null;
   const play = document.getElementById('play');
-  play.addEventListener('click', () => {
+  const toggle = () => {
     if (timer) { clearInterval(timer); timer = null; play.textContent = 'play'; return; }
     if (+slider.value >= T) slider.value = 0;
     play.textContent = 'pause';
@@ -184,10 +184,13 @@ const char* kScript = R"JS(
       slider.value = +slider.value + 1;
       draw(+slider.value);
     }, 1000 * D.dt);
-  });
-  const start = new URLSearchParams(location.search).get('step');
+  };
+  play.addEventListener('click', toggle);
+  // ?step=N opens at step N; ?play=0 opens paused (the page plays on open otherwise).
+  const query = new URLSearchParams(location.search), start = query.get('step');
   slider.value = start === null ? 0 : Math.min(T, Math.max(0, +start));
   draw(+slider.value);
+  if (query.get('play') !== '0' && T > 0) toggle();
 })();
 )JS";
 

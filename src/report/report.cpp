@@ -20,9 +20,20 @@ namespace atacom {
 namespace {
 
 constexpr const char* kMain = "atacom-sac";  // the algorithm whose improvement on each baseline is reported
+constexpr size_t kMinSeeds = kMinSeedsForInterval;
+
+// "n = 1: no interval": what a table cell says instead of a statistic it cannot give.
+std::string no_stat(size_t n, const char* what) { return "n = " + std::to_string(n) + ": no " + what; }
 
 std::string num(double v) {
   if (std::isnan(v)) return "nan";
+  char b[40];
+  std::snprintf(b, sizeof(b), "%.12g", v);
+  return b;
+}
+// A statistic that was not computed (too few seeds): an empty CSV field.
+std::string num_or_empty(double v) {
+  if (std::isnan(v)) return "";
   char b[40];
   std::snprintf(b, sizeof(b), "%.12g", v);
   return b;
@@ -78,7 +89,8 @@ std::vector<Row> table_rows(const ReportData& d, bool censored) {
         r.q1 = quantile(v, 0.25);
         r.q3 = quantile(v, 0.75);
         r.iqm = iqm(v);
-        r.ci = bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream(env + "/" + algo + "/" + m.key));
+        if (r.n >= kMinSeeds)
+          r.ci = bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream(env + "/" + algo + "/" + m.key));
         rows.push_back(r);
       }
   return rows;
@@ -96,7 +108,9 @@ std::vector<Pi> improvements(const ReportData& d) {
         if (!m.boxplot && !m.censored) continue;
         const std::vector<double> x = metric_values(d, env, kMain, m.key), y = metric_values(d, env, base, m.key);
         if (x.empty() || y.empty()) continue;
-        out.push_back({env, m.key, base, x.size(), y.size(), probability_of_improvement(x, y, m.higher_better)});
+        const bool enough = x.size() >= kMinSeeds && y.size() >= kMinSeeds;
+        out.push_back({env, m.key, base, x.size(), y.size(),
+                       enough ? probability_of_improvement(x, y, m.higher_better) : NAN});
       }
     }
   return out;
@@ -154,6 +168,20 @@ std::string methods_text(const ReportData& d) {
          "final distance more than " + short_num(d.opts.drop_distance) + " m above.";
 }
 
+// What a sweep with fewer than kMinSeeds seeds per cell can and cannot show ("" with enough seeds).
+std::string seeds_note(size_t most) {
+  if (most >= kMinSeeds) return "";
+  const std::string n = std::to_string(most);
+  return "At most " + n + " seed" + (most == 1 ? "" : "s") + " per cell: the tables show " +
+         (most == 1 ? "one run's values for each algorithm" : "these runs' values") +
+         ", which say what happened in " + (most == 1 ? "that run" : "these runs") +
+         " (for example whether training hit the table, and the final distance reached) but not how often it "
+         "would happen again or whether a difference between algorithms is larger than the spread between seeds. "
+         "Intervals and P(improvement) need at least " + std::to_string(kMinSeeds) +
+         " seeds per cell (cells with fewer say so, in grey); run more seeds, e.g. configs/sweeps/quick.json "
+         "(3 seeds) or paper.json (25).";
+}
+
 }  // namespace
 
 ReportResult write_report(const ReportOptions& opts) {
@@ -182,8 +210,8 @@ ReportResult write_report(const ReportOptions& opts) {
   std::string csv = "env,algo,metric,n,mean,std,median,q1,q3,iqm,iqm_ci_low,iqm_ci_high\n";
   for (const Row& r : rows)
     csv += r.env + "," + r.algo + "," + r.metric + "," + std::to_string(r.n) + "," + num(r.mean) + "," + num(r.std) +
-           "," + num(r.median) + "," + num(r.q1) + "," + num(r.q3) + "," + num(r.iqm) + "," + num(r.ci.low) + "," +
-           num(r.ci.high) + "\n";
+           "," + num(r.median) + "," + num(r.q1) + "," + num(r.q3) + "," + num(r.iqm) + "," +
+           (r.n >= kMinSeeds ? num(r.ci.low) + "," + num(r.ci.high) : std::string(",")) + "\n";
   write_file_atomic(out("summary.csv"), csv);
   std::string tcsv = "env,algo,metric,n,reached,median,q1,q3,iqm,iqm_ci_low,iqm_ci_high\n";
   for (const Row& r : trows)
@@ -194,7 +222,7 @@ ReportResult write_report(const ReportOptions& opts) {
   std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement\n";
   for (const Pi& p : pis)
     pcsv += p.env + "," + p.metric + "," + kMain + "," + p.baseline + "," + std::to_string(p.nx) + "," +
-            std::to_string(p.ny) + "," + num(p.p) + "\n";
+            std::to_string(p.ny) + "," + num_or_empty(p.p) + "\n";
   write_file_atomic(out("prob_improvement.csv"), pcsv);
   std::string fcsv = "env,algo,seed,final_return,best_return,best_env_steps,final_distance,best_final_distance,drop\n";
   for (const Drop& x : dr)
@@ -228,13 +256,19 @@ ReportResult write_report(const ReportOptions& opts) {
   std::ostringstream md, html;
   md << "# Sweep report: " << opts.dir << "\n\n" << res.finished << " of " << res.runs << " runs finished.\n\n"
      << methods_text(d) << "\n\n";
+  size_t most_seeds = 0;
+  for (const Row& r : rows) most_seeds = std::max(most_seeds, r.n);
+  const std::string few = seeds_note(most_seeds);
+  if (!few.empty()) md << "**" << few << "**\n\n";
   html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>atacom sweep report</title>\n<style>"
           "body{font-family:sans-serif;margin:20px;color:#222}table{border-collapse:collapse;margin:8px 0 20px}"
           "td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:right}th{background:#f3f3f3}"
-          "td.l{text-align:left}.bad{background:#fdd}.good{background:#dfd}svg{max-width:100%;height:auto}"
+          "td.l{text-align:left}.bad{background:#fdd}.good{background:#dfd}td.na{background:#eee;color:#777}"
+          "svg{max-width:100%;height:auto}"
           "p.note{max-width:60em;font-size:13px}</style></head><body>\n"
        << "<h1>Sweep report</h1><p>" << html_escape(opts.dir) << ": " << res.finished << " of " << res.runs
-       << " runs finished.</p><p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
+       << " runs finished.</p>" << (few.empty() ? "" : "<p class=\"note\"><b>" + html_escape(few) + "</b></p>")
+       << "<p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
   for (const auto& env : d.envs) {
     md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n"
        << "![cost and return](cost_return_" << env << ".svg)\n\n![training cost](train_cost_" << env << ".svg)\n\n";
@@ -247,12 +281,14 @@ ReportResult write_report(const ReportOptions& opts) {
             "<th>median [q1, q3]</th></tr>\n";
     for (const Row& r : rows) {
       if (r.env != env) continue;
-      const std::string iq = short_num(r.iqm) + " [" + short_num(r.ci.low) + ", " + short_num(r.ci.high) + "]";
+      const bool ci = r.n >= kMinSeeds;
+      const std::string iq = short_num(r.iqm) + (ci ? " [" + short_num(r.ci.low) + ", " + short_num(r.ci.high) + "]"
+                                                    : " (" + no_stat(r.n, "interval") + ")");
       const std::string ms = short_num(r.mean) + " +- " + short_num(r.std);
       const std::string mq = short_num(r.median) + " [" + short_num(r.q1) + ", " + short_num(r.q3) + "]";
       md << "| " << r.algo << " | " << r.metric << " | " << r.n << " | " << iq << " | " << ms << " | " << mq << " |\n";
       html << "<tr><td class=\"l\">" << r.algo << "</td><td class=\"l\">" << r.metric << "</td><td>" << r.n
-           << "</td><td>" << iq << "</td><td>" << short_num(r.mean) << " &plusmn; " << short_num(r.std) << "</td><td>"
+           << "</td><td" << (ci ? "" : " class=\"na\"") << ">" << iq << "</td><td>" << short_num(r.mean) << " &plusmn; " << short_num(r.std) << "</td><td>"
            << mq << "</td></tr>\n";
     }
     md << "\n";
@@ -286,11 +322,13 @@ ReportResult write_report(const ReportOptions& opts) {
               "<th>n (atacom-sac, baseline)</th><th>P(improvement)</th></tr>\n";
       for (const Pi& p : pis) {
         if (p.env != env) continue;
+        const bool enough = std::min(p.nx, p.ny) >= kMinSeeds;
+        const std::string pv = enough ? short_num(p.p) : no_stat(std::min(p.nx, p.ny), "P(improvement)");
         md << "| " << p.baseline << " | " << p.metric << " (" << (metric_info(p.metric).higher_better ? "higher" : "lower")
-           << " is better) | " << p.nx << ", " << p.ny << " | " << short_num(p.p) << " |\n";
+           << " is better) | " << p.nx << ", " << p.ny << " | " << pv << " |\n";
         html << "<tr><td class=\"l\">" << p.baseline << "</td><td class=\"l\">" << p.metric << "</td><td>" << p.nx
-             << ", " << p.ny << "</td><td class=\"" << (p.p > 0.5 ? "good" : p.p < 0.5 ? "bad" : "") << "\">"
-             << short_num(p.p) << "</td></tr>\n";
+             << ", " << p.ny << "</td><td class=\""
+             << (!enough ? "na" : p.p > 0.5 ? "good" : p.p < 0.5 ? "bad" : "") << "\">" << pv << "</td></tr>\n";
       }
       md << "\n";
       html << "</table>\n";

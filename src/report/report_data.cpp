@@ -33,6 +33,10 @@ const std::vector<ReportMetric>& report_metrics() {
       {"steps_to_target", "env steps to target", false, false, true},
       {"updates_to_target", "updates to target", false, false, true},
       {"train_cost_to_target", "training collisions + violating steps to target", false, false, true},
+      // HRI-Sim (absent elsewhere): the paper's "episodes in which a spill happens", at both angles.
+      {"spills", "episodes with a spill at 25 deg (final policy)", false, false},
+      {"spills_15", "episodes with a spill at 15 deg (final policy)", false, false},
+      {"min_human_distance", "closest approach to the human [m] (final policy)", true, false},
   };
   return m;
 }

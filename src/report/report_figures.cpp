@@ -177,9 +177,12 @@ std::string curves_svg(const ReportData& d, const std::string& env) {
       dashed[i] = s.flat;
       for (const auto& [x, v] : at) {
         if (int(v.size()) != n) continue;  // an evaluation every seed reached
-        const Interval ci = bootstrap_iqm_ci(v, d.opts.curve_resamples, d.opts.seed,
-                                             bootstrap_stream(env + "/" + d.algos[i] + "/curve" +
-                                                              std::to_string(panel) + "/" + std::to_string(x)));
+        // No band from fewer than kMinSeedsForInterval seeds (the line alone).
+        const Interval ci = v.size() < kMinSeedsForInterval
+                                ? Interval{iqm(v), iqm(v)}
+                                : bootstrap_iqm_ci(v, d.opts.curve_resamples, d.opts.seed,
+                                                   bootstrap_stream(env + "/" + d.algos[i] + "/curve" +
+                                                                    std::to_string(panel) + "/" + std::to_string(x)));
         s.x.push_back(x);
         s.mid.push_back(iqm(v));
         s.low.push_back(ci.low);
@@ -193,8 +196,9 @@ std::string curves_svg(const ReportData& d, const std::string& env) {
     SvgCanvas c(pw, ph, 0, xmax, lo, hi, 50);
     c.axes("env steps", panel == 0 ? "eval return" : "final distance [m]", 5, 5);
     c.label(pw / 2, 18,
-            panel == 0 ? "evaluation return: IQM over seeds, 95% bootstrap band"
-                       : "final distance to the goal: IQM over seeds, 95% bootstrap band",
+            std::string(panel == 0 ? "evaluation return" : "final distance to the goal") +
+                ": IQM over seeds, 95% bootstrap band (none with fewer than " +
+                std::to_string(kMinSeedsForInterval) + " seeds)",
             11, "middle");
     for (size_t i = 0; i < series.size(); ++i) {
       const Series& s = series[i];

@@ -34,6 +34,10 @@ struct Interval {
 };
 // The resampling stream of a cell: Rng(seed, stream), stream = fnv1a64(key).
 uint64_t bootstrap_stream(const std::string& key);
+// Fewer seeds than this: the report gives no interval and no P(improvement)
+// (one or two seeds resampled or compared run against run would look like
+// evidence and are not); tables say "n = 1: no interval" in a grey cell.
+constexpr size_t kMinSeedsForInterval = 3;
 // Percentile-bootstrap 95 % interval of the IQM of `v`.
 Interval bootstrap_iqm_ci(const std::vector<double>& v, int resamples, uint64_t seed, uint64_t stream);
 

@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "src/core/fs_util.hpp"
+#include "src/sweep/sweep_cost.hpp"
 #include "src/sweep/sweep_state.hpp"
 
 namespace fs = std::filesystem;
@@ -63,6 +64,23 @@ std::string duration(double s) {
   return b;
 }
 
+// The dry run's last lines: estimated run time of the cells still to run.
+std::string sweep_cost_text(const std::vector<SweepCell>& todo, int jobs, int threads) {
+  if (todo.empty()) return "estimate: nothing left to run\n";
+  SweepCost c;
+  try {
+    c = estimate_sweep_cost(todo);
+  } catch (const std::exception& e) {
+    return std::string("estimate: not available (") + e.what() + ")\n";
+  }
+  std::string out = "estimate: " + duration(c.run_seconds) + " core time";
+  // jobs runs at a time; a run given more threads goes faster, at best in proportion (an upper bound here).
+  out += ", about " + duration(c.run_seconds / double(std::max(1, jobs))) + " with " + std::to_string(jobs) +
+         " at a time" + (threads > 1 ? " (" + std::to_string(threads) + " threads each: likely less)" : "");
+  if (c.unknown > 0) out += "; " + std::to_string(c.unknown) + " runs of an env/layer without a measured rate not counted";
+  return out + "\n  rates: " + c.source + " (data/sweep_rates.json; evaluations counted as full-length episodes)\n";
+}
+
 }  // namespace
 
 int available_cores() {
@@ -94,21 +112,28 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   };
   if (opts.dry_run) {
     if (opts.log) {
+      // Without a directory there is no state to read and nothing will be
+      // written: cells and the estimate only, no paths.
       *opts.log << "sweep: " << mine.size() << " runs";
       if (opts.shard.count > 1) *opts.log << " (shard " << opts.shard.index << "/" << opts.shard.count << " of " << cells.size() << ")";
       *opts.log << ", " << jobs << " at a time, " << threads << " threads each\n";
+      std::vector<SweepCell> todo;
       for (size_t k : mine) {
-        const std::string st = run_files_state(dir, cells[k]);
+        const std::string st = dir.empty() ? "fresh" : run_files_state(dir, cells[k]);
         *opts.log << cells[k].name() << "  " << (st == "fresh" ? "to run" : st == "partial" ? "to resume" : "done");
         if (st != "done") {
-          *opts.log << "  ";
-          std::vector<std::string> cmd = command(cells[k], st == "partial");
-          std::error_code ec;
-          if (cmd[0] == "/proc/self/exe") cmd[0] = fs::read_symlink(cmd[0], ec).string();  // the binary it names
-          for (const auto& s : cmd) *opts.log << " " << s;
+          todo.push_back(cells[k]);
+          if (!dir.empty()) {
+            *opts.log << "  ";
+            std::vector<std::string> cmd = command(cells[k], st == "partial");
+            std::error_code ec;
+            if (cmd[0] == "/proc/self/exe") cmd[0] = fs::read_symlink(cmd[0], ec).string();  // the binary it names
+            for (const auto& s : cmd) *opts.log << " " << s;
+          }
         }
         *opts.log << "\n";
       }
+      *opts.log << sweep_cost_text(todo, busy, threads);
     }
     return 0;
   }
