@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/evaluate.hpp"
 #include "atacom/trainer.hpp"
 #include "src/sweep/sweep_spec.hpp"

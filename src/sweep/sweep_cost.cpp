@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
 #include "atacom/trainer.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/data_dir.hpp"

@@ -6,6 +6,7 @@
 
 #include <atacom/data_dir.hpp>
 #include <atacom/env_registry.hpp>
+#include <atacom/make_env.hpp>
 #include <atacom/projector.hpp>
 
 int main() {
