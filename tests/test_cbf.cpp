@@ -195,11 +195,11 @@ TEST_CASE("cbf filter: the exact QP of the CBF rows and the box on random feasib
 }
 
 TEST_CASE("cbf filter: infeasible rows give the least squared violation and the flag, keys and defaults", "[cbf]") {
-  // a_0 <= -2 (gamma c = 2: J_q G a <= -2 with G = I) and a_0 >= 0.5: no action satisfies both;
+  // a_0 <= -2 (gamma c = 2: J_q G a <= -2 with G = I) and -a_0 <= -0.5: no action satisfies both;
   // the least squared violation over the box: (a + 2)^2 + (0.5 - a)^2 -> a = -0.75 (inside the box).
   bool ok = false;
   json r = run_line(json::parse(R"({"method":"cbf","gamma":1,"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0],[-1,0]],
-      "c":[2,-0.5],"alpha":[1,0.3]})"), &ok);
+      "c":[2,0.5],"alpha":[1,0.3]})"), &ok);
   REQUIRE(ok);
   CHECK(r["status"] == 1);
   CHECK(r["status_flags"] == json::array({"infeasible"}));

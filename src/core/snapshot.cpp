@@ -192,7 +192,9 @@ void read_buffers_section(SnapshotReader& r, EnvBuffers& b) {
   get(b.info, "buffers.info");
   get(b.episode_return, "buffers.episode_return");
   get(b.episode_length, "buffers.episode_length");
-  if (s.peek() != std::char_traits<char>::eof()) {
+  const bool more = s.peek() != std::char_traits<char>::eof();
+  s.clear();  // a peek at the end sets eofbit, which the section's size check (tellg) reads as an error
+  if (more) {
     get(b.cost_continuous, "buffers.cost_continuous");
   } else {  // a snapshot of an earlier build: its cost slot held the continuous cost
     for (size_t i = 0; i < b.cost.size(); ++i) {
