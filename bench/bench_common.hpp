@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <cstdlib>
 #include <string>
+#include <vector>
 
 #if defined(__AVX512F__)
 #include <immintrin.h>
@@ -13,7 +15,35 @@
 
 #include <nlohmann/json.hpp>
 
+#include "src/core/value_range.hpp"
+
 namespace atacom::bench {
+
+// Every numeric argument of a bench program goes through the project's one
+// flag parser (src/core/value_range.hpp, as every `atacom` flag): the whole
+// text, decimal, inside `r`; otherwise the reason on stderr and exit code 2.
+template <class T>
+T flag_value(const char* flag, const std::string& text, const Range<T>& r) {
+  try {
+    return parse_flag_value<T>(flag, text, r);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    std::exit(2);
+  }
+}
+
+// "1,256,4096": each entry through flag_value.
+inline std::vector<int> flag_list(const char* flag, const std::string& text, const Range<int>& r) {
+  std::vector<int> out;
+  size_t pos = 0;
+  while (true) {
+    const size_t comma = text.find(',', pos);
+    out.push_back(flag_value<int>(flag, text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos), r));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
 
 inline double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();

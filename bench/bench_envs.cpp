@@ -26,6 +26,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include "src/cli/flag_checks.hpp"
+#include "src/core/limits.hpp"
+
 #include "atacom/env_registry.hpp"
 #include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
@@ -62,18 +65,6 @@ struct Run {
   }
 };
 
-std::vector<int> parse_list(const std::string& s) {
-  std::vector<int> out;
-  size_t pos = 0;
-  while (pos < s.size()) {
-    const size_t comma = s.find(',', pos);
-    out.push_back(std::stoi(s.substr(pos, comma - pos)));
-    if (comma == std::string::npos) break;
-    pos = comma + 1;
-  }
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -86,11 +77,15 @@ int main(int argc, char** argv) {
   app.add_option("--N", Ns, "comma-separated env counts");
   app.add_option("--threads", threads_s, "comma-separated thread counts");
   app.add_option("--atacom", atacom_s, "on, off or both")->check(CLI::IsMember({"on", "off", "both"}));
-  app.add_option("--repeats", repeats, "timing rounds (best is kept)");
-  app.add_option("--round-seconds", round_s, "minimum seconds per timing round");
+  cli::add_number_flag(app, "--repeats", repeats, range::closed(1, 10000), "timing rounds (best is kept)");
+  cli::add_number_flag(app, "--round-seconds", round_s, range::open_closed(0.0, 600.0), "minimum seconds per timing round");
   app.add_option("--sdf", sdf, "distance fields: default (each env's own), analytic or learned")
       ->check(CLI::IsMember({"default", "analytic", "learned"}));
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // a usage error exits 2, as every atacom command
+  }
   if (envs.empty())
     for (const EnvEntry& e : env_entries())
       if (e.has_constraints) envs.push_back(e.name);
@@ -101,8 +96,8 @@ int main(int argc, char** argv) {
   try {
     for (const std::string& name : envs)
       for (bool atacom : modes)
-        for (int threads : parse_list(threads_s))
-          for (int N : parse_list(Ns)) {
+        for (int threads : bench::flag_list("--threads", threads_s, range::closed(1, limits::kMaxThreads)))
+          for (int N : bench::flag_list("--N", Ns, range::closed(1, limits::kMaxEnvs))) {
             set_num_threads(threads);
             Run run(name, N, atacom, sdf);
             const double sec = bench::best_seconds_per_call([&] { run.step(); }, repeats, round_s);

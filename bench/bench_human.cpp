@@ -13,6 +13,7 @@
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 #include "bench/bench_common.hpp"
+#include "src/core/limits.hpp"
 #include "envs/arm/human_model.hpp"
 #include "envs/arm/human_motion.hpp"
 #include "envs/arm/human_rows.hpp"
@@ -34,7 +35,7 @@ double thread_cpu_s() {
 
 int main(int argc, char** argv) {
   std::vector<int> Ns = {256, 4096};
-  if (argc > 1) Ns = {std::stoi(argv[1])};
+  if (argc > 1) Ns = {bench::flag_value<int>("N", argv[1], range::closed(1, limits::kMaxEnvs))};
   const HumanModel m = load_human_model();
   const HumanMotionLibrary lib = load_default_human_motion();
   const HumanReplayConfig replay;

@@ -177,10 +177,18 @@ std::vector<double> time_filter(const std::string& exe, int n, int m, int k, int
 int main(int argc, char** argv) {
   int calls = 100000, filter_calls = 5000;
   std::string exe;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--calls")) calls = std::max(1, std::atoi(argv[i + 1]));
-    else if (!std::strcmp(argv[i], "--filter-calls")) filter_calls = std::max(0, std::atoi(argv[i + 1]));
-    else if (!std::strcmp(argv[i], "--atacom")) exe = argv[i + 1];
+  for (int i = 1; i < argc; ++i) {
+    const bool has_value = i + 1 < argc;
+    if (!std::strcmp(argv[i], "--calls") && has_value) {
+      calls = bench::flag_value<int>("--calls", argv[++i], range::closed(1, 100'000'000));
+    } else if (!std::strcmp(argv[i], "--filter-calls") && has_value) {
+      filter_calls = bench::flag_value<int>("--filter-calls", argv[++i], range::closed(0, 10'000'000));
+    } else if (!std::strcmp(argv[i], "--atacom") && has_value) {
+      exe = argv[++i];
+    } else {
+      std::fprintf(stderr, "usage: bench_latency [--calls C] [--filter-calls F] [--atacom PATH]\n");
+      return 2;
+    }
   }
   if (exe.empty()) {
     std::error_code ec;

@@ -6,8 +6,15 @@
 // uncontrollable state. Extra lines measure the arm's diagonal G and the
 // machine's float64 FMA peak, so "gflops" can be read as a share of peak.
 //
-// Usage: bench_projector [--quick]
+// Usage: bench_projector [--quick | --bound-pairs R | --bound-calls RULE C]
+//   --bound-pairs R: only the arm's case (diagonal G, a only, N = 16384,
+//   1 thread), the bound rules tangent_scale and correction_first measured
+//   in turn, R rounds (issue 31).
+//   --bound-calls RULE C: the same case, C calls with one rule and no
+//   timing, for instruction counts (perf stat -e instructions:u).
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -45,9 +52,40 @@ void fill(const ProjectorModel& mod, ProjectorBatch& B, uint64_t seed) {
   for (auto& v : B.alpha) v = rng.uniform(-1.0, 1.0);
 }
 
+// The bound rules in alternating rounds, so a shared host's load drifts over all alike.
+int bound_pairs(int rounds, const char* only = nullptr, int calls = 0) {
+  set_num_threads(1);
+  ProjectorModel mod = default_projector_model(7, 7, 34, 0);
+  mod.g_form = GForm::Diagonal;
+  mod.has_drift = false;
+  ProjectorBatch B(mod, 16384);
+  fill(mod, B, 2);
+  if (only) {
+    mod.bounds = parse_bound_rule(only);
+    for (int c = 0; c < calls; ++c) project_batch(mod, B, {.store_slack = false});
+    return 0;
+  }
+  const char* names[] = {"tangent_scale", "correction_first"};
+  for (int r = 0; r < rounds; ++r) {
+    for (int v = 0; v < 2; ++v) {
+      mod.bounds = v == 0 ? BoundRule::TangentScale : BoundRule::CorrectionFirst;
+      const double t = bench::best_seconds_per_call([&] { project_batch(mod, B, {.store_slack = false}); }, 3, 0.1);
+      int out = 0;
+      for (uint32_t st : B.status) out += (st & kStatusBiasOutOfBounds) != 0;
+      bench::emit({{"bench", "projector_bounds"}, {"N", 16384}, {"k", 34}, {"m", 7}, {"G", "diagonal"},
+                   {"slack_out", false}, {"threads", 1}, {"round", r}, {"bounds", names[v]},
+                   {"bias_out_share", double(out) / 16384}, {"per_s", 16384 / t}});
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 2 && std::strcmp(argv[1], "--bound-pairs") == 0) return bound_pairs(std::max(1, std::atoi(argv[2])));
+  if (argc > 3 && std::strcmp(argv[1], "--bound-calls") == 0)
+    return bound_pairs(1, argv[2], std::max(0, std::atoi(argv[3])));
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   const std::string cpu = bench::cpu_name();
   set_num_threads(1);

@@ -25,6 +25,7 @@ One JSON object per line, like the C++ benches:
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -189,16 +190,34 @@ def bench_projector(args):
             emit(line)
 
 
+def _number(kind, lo, hi):
+    """An argparse type: the whole text a decimal number of `kind` in [lo, hi]
+    (as every numeric flag of atacom and of the C++ benches: no hex, no
+    underscores, no spaces, no NaN/inf); argparse turns the error into exit 2."""
+    pattern = r"[+-]?[0-9]+" if kind is int else r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?"
+
+    def parse(text):
+        if not re.fullmatch(pattern, text):
+            raise argparse.ArgumentTypeError(f"{text!r} is not {'an integer' if kind is int else 'a number'} "
+                                             f"in [{lo}, {hi}]")
+        value = kind(text)
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {'an integer' if kind is int else 'a number'} "
+                                             f"in [{lo}, {hi}]")
+        return value
+    return parse
+
+
 def main():
     ap = argparse.ArgumentParser(description="bench_python: Python module vs the native C++ benches")
     ap.add_argument("--build", default=os.path.join(os.path.dirname(HERE), "build"), help="build directory")
     ap.add_argument("--env", nargs="+", default=["table", "nav", "pendulum"])
-    ap.add_argument("--N", nargs="+", type=int, default=[1, 256, 4096])
-    ap.add_argument("--threads", nargs="+", type=int, default=[2])
+    ap.add_argument("--N", nargs="+", type=_number(int, 1, 2**20), default=[1, 256, 4096])
+    ap.add_argument("--threads", nargs="+", type=_number(int, 1, 1024), default=[2])
     ap.add_argument("--modes", nargs="+", default=["same_step"], help="autoreset modes to time")
-    ap.add_argument("--pairs", type=int, default=2, help="alternating native/Python measurements (best kept)")
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--round-seconds", type=float, default=0.2)
+    ap.add_argument("--pairs", type=_number(int, 1, 1000), default=2, help="alternating native/Python measurements (best kept)")
+    ap.add_argument("--repeats", type=_number(int, 1, 10000), default=5)
+    ap.add_argument("--round-seconds", type=_number(float, 1e-3, 600.0), default=0.2)
     ap.add_argument("--skip-envs", action="store_true")
     ap.add_argument("--skip-projector", action="store_true")
     args = ap.parse_args()

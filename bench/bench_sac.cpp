@@ -292,17 +292,13 @@ int main(int argc, char** argv) {
           only != "gemm_tile" && only != "fma_peak")
         return usage();
     } else if (!std::strcmp(argv[i], "--batch") && has_value) {
-      batch_only = std::atoi(argv[++i]);
-      if (batch_only < 1 || batch_only > 65536) return usage();
+      batch_only = bench::flag_value<int>("--batch", argv[++i], range::closed(1, 65536));
     } else if (!std::strcmp(argv[i], "--threads") && has_value) {
-      threads_only = std::atoi(argv[++i]);
-      if (threads_only < 1 || threads_only > 256) return usage();
+      threads_only = bench::flag_value<int>("--threads", argv[++i], range::closed(1, 256));
     } else if (!std::strcmp(argv[i], "--repeats") && has_value) {
-      repeats = std::atoi(argv[++i]);
-      if (repeats < 1 || repeats > 10000) return usage();
+      repeats = bench::flag_value<int>("--repeats", argv[++i], range::closed(1, 10000));
     } else if (!std::strcmp(argv[i], "--window") && has_value) {
-      window_s = std::atof(argv[++i]);
-      if (!(window_s > 0 && window_s <= 600)) return usage();
+      window_s = bench::flag_value<double>("--window", argv[++i], range::open_closed(0.0, 600.0));
     } else {
       return usage();
     }

@@ -478,6 +478,13 @@ void project_lanes(const ProjectorModel& mod, ProjectorBatch& B, int lo, int hi,
   }
   // !(lam > 0) also catches NaN.
   lam = (bias_out | ~(lam > 0.0)) ? V{} : lam;
+  if (mod.bounds == BoundRule::CorrectionFirst) {
+    // b outside the box: scaled into it as a whole, keeping its direction.
+    V bmax = V{};
+    for (int j = 0; j < m; ++j) bmax = vmax(bmax, vmax(S.b[j], -S.b[j]));
+    const V scale = bias_out ? 1.0 / bmax : splat(1.0);
+    for (int j = 0; j < m; ++j) S.b[j] *= scale;
+  }
   for (int j = 0; j < m; ++j) S.a[j] = S.b[j] + lam * S.t[j];
 
   // ---- slack controls u_s = -A^-1 (r + J_G a), into y. J_G a = J_q (G a)
@@ -755,6 +762,7 @@ void project_general_one(const ProjectorModel& mod, ProjectorBatch& B, int e, Ge
     bool bias_out = false;
     const double lam = tangent_scale(W.b.data(), W.t.data(), m, &bias_out);
     if (bias_out) status |= kStatusBiasOutOfBounds;
+    if (bias_out && mod.bounds == BoundRule::CorrectionFirst) W.b /= W.b.cwiseAbs().maxCoeff();
     W.a = W.b + lam * W.t;
     bool ok = W.a.allFinite();
     for (int i = 0; i < (us_out ? k : 0); ++i) {

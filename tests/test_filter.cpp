@@ -45,6 +45,24 @@ TEST_CASE("filter: options (slack per row, smooth basis, equality, J_x)", "[filt
   CHECK(r["a"][1].get<double>() == Approx(-0.2).margin(1e-9));
 }
 
+TEST_CASE("filter: a correction outside the box is scaled (default) or returned as is (bounds)", "[filter]") {
+  // c = 0.1 with K_c 30: b = -3 along the row, far outside the box.
+  const std::string base = R"("f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,1]],"c":[0.1],"alpha":[1,-1])";
+  bool ok = false;
+  const json first = run("{" + base + "}", &ok);
+  REQUIRE(ok);
+  CHECK(first["status"] == 1);
+  CHECK(first["a"][0].get<double>() == Approx(-1.0));
+  CHECK(first["a"][1].get<double>() == Approx(-1.0));
+  const json old = run("{" + base + R"(,"bounds":"tangent_scale"})", &ok);
+  REQUIRE(ok);
+  CHECK(old["a"][0].get<double>() == Approx(-1.5));
+  CHECK(old["a"][1].get<double>() == Approx(-1.5));
+  const json bad = run("{" + base + R"(,"bounds":"clip"})", &ok);
+  CHECK_FALSE(ok);
+  CHECK(bad["error"].get<std::string>().find("unknown bound rule 'clip'") != std::string::npos);
+}
+
 TEST_CASE("filter: malformed lines give an error naming the problem", "[filter]") {
   const struct { const char* line; const char* expect; } cases[] = {
       {"{not json", "not valid JSON"},

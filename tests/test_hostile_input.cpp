@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -18,6 +19,7 @@
 #include "atacom/rng.hpp"
 #include "atacom/trainer.hpp"
 #include "src/core/limits.hpp"
+#include "src/core/value_range.hpp"
 #include "src/safety/filter.hpp"
 #include "tests/shell_run.hpp"
 
@@ -201,6 +203,95 @@ TEST_CASE("hostile flags: every integer flag is range-checked with its name and 
   CHECK(json::parse(r.out)["threads"].get<int>() < 1024);
   // Defaults are shown.
   CHECK(atacom_cli("rollout --help").out.find("--steps INT=100000") != std::string::npos);
+}
+
+// Issue 28 item 10: numeric flags outside the checked parser read "00017" as
+// octal 15, saturated 2^64 to 2^63 - 1, took "0x10" as 16 and "nan" as the
+// default. The one parser, then every flag of every subcommand through it.
+TEST_CASE("hostile flags: the one numeric flag parser reads decimal text whole, in range, never NaN", "[hostile]") {
+  using atacom::parse_flag_value;
+  namespace range = atacom::range;
+  const auto seeds = range::closed<int64_t>(0, std::numeric_limits<int64_t>::max());
+  CHECK(parse_flag_value<int64_t>("--seed", "00017", seeds) == 17);
+  CHECK(parse_flag_value<int>("--epochs", "010", range::closed(1, 100)) == 10);
+  CHECK(parse_flag_value<int64_t>("--seed", "+5", seeds) == 5);
+  CHECK_THROWS_WITH(parse_flag_value<int64_t>("--seed", "18446744073709551616", seeds),
+                    "--seed: 18446744073709551616 is not an integer >= 0");
+  CHECK_THROWS_WITH(parse_flag_value<int64_t>("--seed", "9223372036854775808", seeds),
+                    "--seed: 9223372036854775808 is not an integer >= 0");
+  CHECK_THROWS_WITH(parse_flag_value<int>("--patience", "0x10", range::closed(1, 100)),
+                    "--patience: 0x10 is not an integer in [1, 100]");
+  CHECK_THROWS_WITH(parse_flag_value<uint64_t>("--bootstrap-seed", "-1", range::closed<uint64_t>(0, 100)),
+                    "--bootstrap-seed: -1 is not an integer in [0, 100]");
+  for (const char* bad : {"+-5", "-+5", " 5", "5 ", "1e3", "", "5\x01"})
+    CHECK_THROWS(parse_flag_value<int>("--jobs", bad, range::closed(1, 4096)));
+  CHECK(parse_flag_value<double>("--lr", "1e-3", range::open_closed(0.0, 1.0)) == 1e-3);
+  CHECK(parse_flag_value<double>("--lr", ".5", range::open_closed(0.0, 1.0)) == 0.5);
+  for (const char* bad : {"nan", "NaN", "inf", "-inf", "infinity", "0x1p-3", "1e400", "1,5", "0.5x"})
+    CHECK_THROWS_WITH(parse_flag_value<double>("--lr", bad, range::open_closed(0.0, 1.0)),
+                      Catch::StartsWith(std::string("--lr: ")) && Catch::EndsWith("is not a number in (0, 1]"));
+}
+
+TEST_CASE("hostile flags: every numeric flag of every subcommand goes through the one range-checked parser",
+          "[hostile]") {
+  // Subcommands from `atacom --help`, their numeric flags from `atacom SUB --help` (CLI11's type names).
+  std::vector<std::string> subs = {""};
+  {
+    std::istringstream help(atacom_cli("--help").out);
+    bool in_subs = false;
+    for (std::string line; std::getline(help, line);) {
+      if (line.rfind("SUBCOMMANDS:", 0) == 0 || line.rfind("Subcommands:", 0) == 0) in_subs = true;
+      else if (in_subs && line.size() > 2 && line[0] == ' ' && line[1] == ' ' && line[2] != ' ')
+        subs.push_back(line.substr(2, line.find(' ', 2) - 2));
+      else if (in_subs && !line.empty() && line[0] != ' ') in_subs = false;
+    }
+  }
+  REQUIRE(subs.size() >= 13);
+  // The type is a whole word ("--stats Excludes: --out" is a flag without one, not of type "E").
+  const std::regex option(R"(^\s+(?:-\w, )?(--[a-z0-9-]+)(?:,[^ ]*)? ([A-Z][A-Z0-9_:]*)(?=[= ]|$))");
+  int numeric = 0;
+  for (const std::string& sub : subs) {
+    std::vector<std::string> lines;
+    {
+      std::istringstream help(atacom_cli(sub + " --help").out);
+      for (std::string line; std::getline(help, line);) lines.push_back(line);
+    }
+    for (size_t i = 0; i < lines.size(); ++i) {
+      std::smatch m;
+      if (!std::regex_search(lines[i], m, option)) continue;
+      // A long flag name pushes its description to the next line.
+      const bool wrapped = i + 1 < lines.size() && lines[i + 1].find_first_not_of(' ') != std::string::npos &&
+                           lines[i + 1][lines[i + 1].find_first_not_of(' ')] != '-';
+      const std::string line = lines[i] + (wrapped ? lines[i + 1] : "");
+      const std::string flag = m[1], type = m[2];
+      if (type == "TEXT" || type.rfind("TEXT:", 0) == 0 || flag == "--help") continue;
+      if (sub.empty() && flag != "--threads") continue;  // the top level lists only its own flags
+      INFO(sub << " " << flag << " (" << type << "): " << line);
+      // Ours are INT or NUMBER, with the range in the help; CLI11's own numbers are INT:..., UINT, FLOAT.
+      CHECK((type == "INT" || type == "NUMBER"));
+      CHECK((line.find("(in [") != std::string::npos || line.find("(in (") != std::string::npos ||
+             line.find("(>= ") != std::string::npos));
+      ++numeric;
+      for (const std::string bad : {"0x10", "nan", "12abc", "99999999999999999999999"}) {
+        const std::string args = sub.empty() ? flag + " " + bad + " filter" : sub + " " + flag + " " + bad;
+        const Result r = atacom_cli(args);
+        INFO(args << " -> " << r.out);
+        CHECK(r.rc == 2);
+        CHECK(r.out.find(flag + ": " + bad + " is not ") != std::string::npos);
+      }
+    }
+  }
+  CHECK(numeric >= 35);  // the walk saw them (a change of the help format must not make this pass vacuously)
+  // Whole decimal text and the range in the message, on the examples of the issue.
+  CHECK(atacom_cli("sdf-train --object table --out /nonexistent/x --epochs 0").out.find(
+            "--epochs: 0 is not an integer in [1, 100000]") != std::string::npos);
+  CHECK(atacom_cli("report /nonexistent --bootstrap-seed -1").out.find(
+            "--bootstrap-seed: -1 is not an integer in [0, 2^63 - 1]") != std::string::npos);
+  CHECK(atacom_cli("sweep x.json --out /nonexistent/x --jobs 0x10").rc == 2);
+  CHECK(atacom_cli("sdf-train --object table --out /nonexistent/x --lr nan").out.find(
+            "--lr: nan is not a number in (0, 1]") != std::string::npos);
+  CHECK(atacom_cli("sdf-train --object table --out /nonexistent/x --hidden 64,0x10").out.find(
+            "--hidden: 0x10 is not an integer in [1, 8192]") != std::string::npos);
 }
 
 TEST_CASE("hostile output: a failed write or flush on stdout is an error exit", "[hostile]") {

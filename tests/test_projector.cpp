@@ -208,9 +208,10 @@ TEST_CASE("projector: equality rows (general path) and the smooth basis equal th
         Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>> T(B.Na.data() + size_t(e) * sh.m * sh.m,
                                                                            sh.m, sh.m);
         CHECK(amax(T - ref.N.topRows(sh.m)) <= 1e-9);
-        // Equality rows hold exactly to first order: J_E a = -r_E.
+        // Equality rows hold exactly to first order: J_E a = -r_E, unless the
+        // correction alone left the box and was scaled into it (correction_first).
         for (int i = 0; i < sh.k; ++i) {
-          if (!mod.equality[i]) continue;
+          if (!mod.equality[i] || (ref.status & kStatusBiasOutOfBounds)) continue;
           double v = ref.rhs(i);
           for (int j = 0; j < sh.m; ++j) v += ref.Ju(i, j) * B.a[size_t(e) * sh.m + j];
           CHECK(std::abs(v) <= 1e-9 * (1.0 + std::abs(ref.rhs(i))));
@@ -314,6 +315,7 @@ TEST_CASE("projector: basis is continuous along a smooth path where a QR null sp
 
 TEST_CASE("projector: bounds scale only the tangential part", "[projector]") {
   ProjectorModel mod = default_projector_model(2, 2, 1, 0);
+  mod.bounds = BoundRule::TangentScale;  // the rule that hands b to the env
   mod.has_drift = true;
   ProjectorBatch B(mod, 2);
   B.G = {1, 0, 0, 1, 1, 0, 0, 1};
@@ -413,4 +415,61 @@ TEST_CASE("projector: skipping the slack outputs changes nothing else", "[projec
     for (double v : lean.s) CHECK(v == -7.0);
     for (double v : lean.slack_u) CHECK(v == -7.0);
   }
+}
+
+TEST_CASE("projector: correction-first bounds equal the reference and keep a inside the box", "[projector]") {
+  Rng rng(31, 5);
+  const Shape shapes[] = {{7, 7, 34, 0}, {3, 2, 5, 2}, {4, 3, 6, 1}, {2, 2, 3, 0}};
+  int scaled = 0;
+  for (const Shape& sh : shapes) {
+    for (int variant = 0; variant < 4; ++variant) {
+      ProjectorModel mod = random_model(rng, sh);
+      for (int i = 0; i < sh.k; ++i) mod.tol[i] = 1e-3;  // agreement to 1e-9 needs a conditioned J_u
+      mod.K_c = 30.0;
+      mod.bounds = variant % 2 ? BoundRule::CorrectionFirst : BoundRule::TangentScale;
+      if (variant >= 2 && sh.k > 1) mod.equality[0] = 1;  // the general path
+      const int N = 29;
+      ProjectorBatch B(mod, N);
+      for (int e = 0; e < N; ++e) fill_random(mod, B, e, rng, -0.3, 0.1);
+      project_batch(mod, B);
+      for (int e = 0; e < N; ++e) {
+        const ReferenceOutput ref = project_reference(mod, reference_input(mod, B, e));
+        INFO("shape m=" << sh.m << " k=" << sh.k << " variant " << variant << " env " << e);
+        const double scale = 1.0 + amax(ref.b.head(sh.m));
+        CHECK(max_abs_diff(B.a.data() + size_t(e) * sh.m, ref.a.data(), sh.m) <= 1e-9 * scale);
+        CHECK(max_abs_diff(B.slack_u.data() + size_t(e) * sh.k, ref.slack_u.data(), sh.k) <=
+              1e-7 * (1.0 + amax(ref.slack_u)));
+        CHECK(std::abs(B.lambda[e] - ref.lambda) <= 1e-9);
+        CHECK(B.status[e] == ref.status);
+        const bool out = (ref.status & kStatusBiasOutOfBounds) != 0;
+        if (mod.bounds == BoundRule::CorrectionFirst) {
+          // Always inside the box; when b was outside, a is b scaled as a whole.
+          for (int j = 0; j < sh.m; ++j) CHECK(std::abs(B.a[size_t(e) * sh.m + j]) <= 1.0 + 1e-12);
+          if (out) {
+            const Eigen::VectorXd b = ref.b.head(sh.m);
+            const Eigen::VectorXd a = Eigen::Map<const Eigen::VectorXd>(B.a.data() + size_t(e) * sh.m, sh.m);
+            CHECK(amax(a - b / amax(b)) <= 1e-9 * scale);
+            ++scaled;
+          }
+        } else if (out) {
+          // The old rule hands the env b itself.
+          CHECK(amax(ref.a - ref.b.head(sh.m)) == 0.0);
+        }
+      }
+    }
+  }
+  CHECK(scaled > 20);
+}
+
+TEST_CASE("projector: the default factory and JSON carry the bound rule", "[projector]") {
+  ProjectorModel mod = default_projector_model(3, 2, 4, 0);
+  CHECK(mod.bounds == BoundRule::CorrectionFirst);
+  nlohmann::json j = mod;
+  CHECK(j.at("bounds") == "correction_first");
+  j["bounds"] = "tangent_scale";
+  CHECK(j.get<ProjectorModel>().bounds == BoundRule::TangentScale);
+  j.erase("bounds");
+  CHECK(j.get<ProjectorModel>().bounds == BoundRule::CorrectionFirst);
+  j["bounds"] = "clip";
+  CHECK_THROWS_WITH(j.get<ProjectorModel>(), Catch::Contains("unknown bound rule 'clip'"));
 }

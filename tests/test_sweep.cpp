@@ -133,11 +133,11 @@ TEST_CASE("sweep: cells in spec order, overrides least specific first", "[sweep]
   REQUIRE(cells[0].name() == "table-sac-seed0");
   REQUIRE(cells[0].run_dir() == "runs/table/sac/seed-0");
   REQUIRE(cells[3].name() == "table-atacom-sac-seed1");
-  REQUIRE(cells[0].config["sac"]["lr_actor"] == 1e-5);   // table/sac wins over table/*
-  REQUIRE(cells[0].config["sac"]["lr_critic"] == 3e-5);  // merged, not replaced
-  REQUIRE(cells[2].config["sac"]["lr_actor"] == 2e-5);
-  REQUIRE(cells[2].config["train"]["eval_every"] == 500);
-  REQUIRE(cells[3].config["train"]["seed"] == 1);
+  REQUIRE(cells[0].config()["sac"]["lr_actor"] == 1e-5);   // table/sac wins over table/*
+  REQUIRE(cells[0].config()["sac"]["lr_critic"] == 3e-5);  // merged, not replaced
+  REQUIRE(cells[2].config()["sac"]["lr_actor"] == 2e-5);
+  REQUIRE(cells[2].config()["train"]["eval_every"] == 500);
+  REQUIRE(cells[3].config()["train"]["seed"] == 1);
   REQUIRE(!cells[4].learns);
   Shard s{1, 4};
   REQUIRE((!s.holds(0) && s.holds(1) && s.holds(5) && !s.holds(6)));

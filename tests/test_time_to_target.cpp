@@ -303,7 +303,7 @@ TEST_CASE("time to target: --stop-at-target on the command line and train.stop_a
       "seeds": [0], "steps": 1000, "overrides": {"*/*": {"train": {"stop_at_target": true}}}})"));
   const auto cells = atacom::sweep_cells(spec);
   REQUIRE(cells.size() == 1);
-  CHECK(atacom::resolve_run_config(cells[0].config).train.stop_at_target);
+  CHECK(atacom::resolve_run_config(cells[0].config()).train.stop_at_target);
   CHECK(!atacom::resolve_run_config(json::object()).train.stop_at_target);
   CHECK_THROWS_WITH(atacom::resolve_run_config({{"train", {{"stop_at_target", 1}}}}),
                     Catch::Contains("train.stop_at_target"));

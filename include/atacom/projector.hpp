@@ -37,6 +37,17 @@ enum class BasisType : uint8_t { Projected = 0, Smooth = 1 };
 // (n == m), which velocity-controlled arms use.
 enum class GForm : uint8_t { Dense = 0, Diagonal = 1 };
 
+// How the control is kept inside [-1, 1]^m (docs/projector.md, "Bounds").
+//   TangentScale     a = b + lambda t, lambda the largest in [0, 1] keeping the
+//                    box; b is never scaled (outside the box: a = b, the env
+//                    clips it per component).
+//   CorrectionFirst  the same while b is inside the box; when it is not,
+//                    lambda = 0 and b is scaled as a whole into the box
+//                    (a = b / max_j |b_j|), so every row keeps its share of
+//                    the correction instead of the per-component clip
+//                    turning it.
+enum class BoundRule : uint8_t { TangentScale = 0, CorrectionFirst = 1 };
+
 // Per-env status bits written by the projector.
 enum ProjectorStatus : uint32_t {
   kStatusOk = 0,
@@ -50,6 +61,8 @@ std::string slack_type_name(SlackType t);
 SlackType parse_slack_type(const std::string& s);     // throws std::invalid_argument
 std::string basis_type_name(BasisType t);
 BasisType parse_basis_type(const std::string& s);     // throws std::invalid_argument
+std::string bound_rule_name(BoundRule r);
+BoundRule parse_bound_rule(const std::string& s);     // throws std::invalid_argument
 
 // Static description shared by all envs of a batch.
 struct ProjectorModel {
@@ -63,6 +76,7 @@ struct ProjectorModel {
   std::vector<uint8_t> equality;    // (k) 1: equality row, no slack column
   double K_c = 30.0;                // error-correction gain (1/dt at 30 Hz); 0 disables
   BasisType basis = BasisType::Projected;
+  BoundRule bounds = BoundRule::TangentScale;  // the factory sets CorrectionFirst (issue 31)
   GForm g_form = GForm::Dense;
   bool has_drift = true;            // false: f == 0 and the f array is ignored
 
@@ -72,7 +86,7 @@ struct ProjectorModel {
 };
 
 // The one default factory: SoftCorner, beta 3, tol 1e-6 on every row,
-// no equality rows, K_c 30, projected basis, dense G, with drift.
+// no equality rows, K_c 30, projected basis, CorrectionFirst, dense G, drift.
 ProjectorModel default_projector_model(int n, int m, int k, int p = 0);
 
 void to_json(nlohmann::json& j, const ProjectorModel& model);

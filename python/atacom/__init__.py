@@ -21,6 +21,7 @@ ATACOM_DATA_DIR when that is set.
 """
 import json as _json
 import os as _os
+import warnings as _warnings
 
 from ._build_check import check_numpy as _check_numpy
 
@@ -36,7 +37,8 @@ _DATA = _os.path.join(_os.path.dirname(_os.path.abspath(__file__)), "data")
 if _os.path.isdir(_DATA):
     _core.set_data_dir(_DATA)
 
-from ._core import RandomStreams, data_dir, env_names, num_threads, set_num_threads  # noqa: E402
+from ._arrays import MAX_THREADS, as_count  # noqa: E402
+from ._core import RandomStreams, data_dir, env_names, num_threads  # noqa: E402
 from .projector import STATUS_FLAGS, Projector, ProjectResult, project, status_flags  # noqa: E402
 from .safelayer import SafeLayerResult, safelayer  # noqa: E402
 from .spaces import HAVE_GYMNASIUM, Box  # noqa: E402
@@ -50,6 +52,20 @@ GYMNASIUM_IDS = _register_envs()  # "atacom/Table-v0", ... when Gymnasium is imp
 def default_config(env):
     """The env's default config (what make_vec's config overrides)."""
     return _json.loads(_core.default_env_config(env))
+
+
+def set_num_threads(threads):
+    """Worker threads of the C++ side, as the CLI's --threads: 0 = all cores,
+    else an integer in [0, 1024]; more than this machine's cores are clamped
+    to them (with a RuntimeWarning). Results do not depend on it."""
+    threads = as_count(threads, "threads", 0, MAX_THREADS)
+    _core.set_num_threads(0)
+    cores = _core.num_threads()
+    if threads > cores:
+        _warnings.warn(f"set_num_threads({threads}) is more than the {cores} cores here; using {cores}",
+                       RuntimeWarning, stacklevel=2)
+        threads = cores
+    _core.set_num_threads(threads)
 
 
 def safety_layers():

@@ -47,12 +47,19 @@ class ControlAffineBatch:
         if alpha.shape[0] != N or c.shape[0] != N:
             raise ValueError(f"f, alpha and c must have the same number of rows N (got {N}, {alpha.shape[0]}, "
                              f"{c.shape[0]})")
-        m, k = alpha.shape[1], c.shape[1]
+        m = alpha.shape[1]
         if n < 1:
             raise ValueError("f must not be empty (it sets n)")
         if m < 1:
             raise ValueError("alpha must not be empty (it sets m)")
         G = as_float64(G, "G", shape=(N, n, m), ndim=3)
+        # k is J_q's row count when J_q is otherwise right, so a c of the wrong
+        # width is blamed on c (not on a J_q that fits f).
+        J_q = as_float64(J_q, "J_q", ndim=3)
+        if J_q.shape[0] == N and J_q.shape[2] == n and J_q.shape[1] != c.shape[1]:
+            raise ValueError(f"c must have shape {(N, J_q.shape[1])} (one value per row of J_q {J_q.shape}), "
+                             f"got {c.shape}")
+        k = c.shape[1]
         J_q = as_float64(J_q, "J_q", shape=(N, k, n), ndim=3)
         if (J_x is None) != (xdot is None):
             raise ValueError("J_x and xdot must be given together")
@@ -98,10 +105,27 @@ def as_seed(seed, name="seed"):
     return s
 
 
-def as_count(value, name, minimum=1):
+def as_count(value, name, minimum=1, maximum=None):
+    """An integer count in [minimum, maximum] (maximum None: no upper bound)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
     value = int(value)
-    if value < minimum:
-        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    if value < minimum or (maximum is not None and value > maximum):
+        bound = f">= {minimum}" if maximum is None else f"in [{minimum}, {_readable(maximum)}]"
+        raise ValueError(f"{name} must be an integer {bound}, got {value}")
     return value
+
+
+def _readable(v):
+    """2**20 as '2^20', as the CLI prints its limits."""
+    if v >= 65536 and v & (v - 1) == 0:
+        return f"2^{v.bit_length() - 1}"
+    if v >= 65536 and (v + 1) & v == 0:
+        return f"2^{v.bit_length()} - 1"
+    return str(v)
+
+
+# The limits of the CLI (src/core/limits.hpp), the same from Python.
+MAX_ENVS = 2**20     # parallel envs of one batch (train.num_envs, --envs)
+MAX_BATCH = 2**31 - 1  # problems of one projector batch (a C++ int)
+MAX_THREADS = 1024   # --threads

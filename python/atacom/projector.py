@@ -24,11 +24,11 @@ import numbers
 import numpy as np
 
 from . import _core
-from ._arrays import ControlAffineBatch, as_count
+from ._arrays import MAX_BATCH, ControlAffineBatch, as_count, as_float64
 
 # Bits of the status array (ProjectorStatus in include/atacom/projector.hpp).
 STATUS_FLAGS = {
-    1: "bias_out_of_bounds",    # the correction alone is outside [-1, 1]^m: lambda = 0, a = b
+    1: "bias_out_of_bounds",    # the correction alone is outside [-1, 1]^m: lambda = 0, a = b scaled into the box
     2: "alpha_nonfinite",       # NaN/Inf in alpha: replaced by 0 (pure correction)
     4: "model_nonfinite",       # NaN/Inf in f, G, c, J or xdot: a = 0 (stop)
     8: "equality_rank_loss",    # equality rows dependent: solved in least squares
@@ -139,25 +139,65 @@ def project(f, G, J_q, c, alpha, J_x=None, xdot=None, slack=None, beta=None, tol
     return ProjectResult(out)
 
 
+def _input_view(name):
+    """A writable input array: assigning copies the values in (checked shape), never replaces the view."""
+
+    def get(self):
+        return self._views[name]
+
+    def set(self, value):
+        view = self._views[name]
+        np.copyto(view, as_float64(value, name, shape=view.shape, ndim=view.ndim))
+
+    return property(get, set, doc=f"input {name}: writable float64 view; `p.{name} = x` copies x in (same shape)")
+
+
+def _output_view(name, key):
+    def get(self):
+        return self._views[key]
+
+    def set(self, value):
+        raise AttributeError(f"'{name}' is an output of project() (read-only); write the inputs "
+                             f"(f, G, J_q, c, alpha, J_x, xdot) instead")
+
+    return property(get, set, doc=f"output {name}: read-only view, overwritten by each project()")
+
+
+def _dimension(name):
+    def get(self):
+        return self._dims[name]
+
+    def set(self, value):
+        raise AttributeError(f"'{name}' is fixed when the Projector is made; make a new Projector for another size")
+
+    return property(get, set, doc=f"dimension {name} (fixed)")
+
+
 class Projector:
     """A persistent batch of N problems: write the inputs in place, call project().
 
     Inputs f, G, J_q, c, alpha (and J_x, xdot when p > 0) are writable float64
-    arrays of the shapes project() takes; a, s, slack_u, lambda_, status are
-    read-only outputs, overwritten by each project(). Nothing is copied or
-    allocated per call: the fastest way to run the kernel from Python.
+    arrays of the shapes project() takes: write into them (`p.alpha[:] = x`)
+    or assign (`p.alpha = x` copies x in, with its shape checked); a, s,
+    slack_u, lambda_, status are read-only outputs, overwritten by each
+    project(); N, n, m, k, p are fixed. Nothing is copied or allocated per
+    call: the fastest way to run the kernel from Python.
     """
 
+    __slots__ = ("_core", "_views", "_dims")
+
     def __init__(self, N, n, m, k, p=0, slack=None, beta=None, tol=None, K_c=None, basis=None, equality=None):
-        N = as_count(N, "N")
+        N = as_count(N, "N", maximum=MAX_BATCH)
         n, m = as_count(n, "n"), as_count(m, "m")
         k, p = as_count(k, "k", 0), as_count(p, "p", 0)
         self._core = _core.Projector(_model_json(n, m, k, p, slack, beta, tol, K_c, basis, equality), N)
-        self.N, self.n, self.m, self.k, self.p = N, n, m, k, p
-        v = self._core.views()
-        self.f, self.G, self.J_q, self.c, self.alpha = v["f"], v["G"], v["J_q"], v["c"], v["alpha"]
-        self.J_x, self.xdot = v["J_x"], v["xdot"]
-        self.a, self.s, self.slack_u, self.lambda_, self.status = v["a"], v["s"], v["slack_u"], v["lambda"], v["status"]
+        self._dims = {"N": N, "n": n, "m": m, "k": k, "p": p}
+        self._views = self._core.views()
+
+    N, n, m, k, p = (_dimension(d) for d in ("N", "n", "m", "k", "p"))
+    f, G, J_q, c, alpha, J_x, xdot = (_input_view(v) for v in ("f", "G", "J_q", "c", "alpha", "J_x", "xdot"))
+    a, s, slack_u, status = (_output_view(v, v) for v in ("a", "s", "slack_u", "status"))
+    lambda_ = _output_view("lambda_", "lambda")
 
     @property
     def model(self):

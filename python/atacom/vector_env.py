@@ -16,7 +16,7 @@ import struct
 import numpy as np
 
 from . import _core
-from ._arrays import as_count, as_float64, as_mask, as_seed
+from ._arrays import MAX_ENVS, as_count, as_float64, as_mask, as_seed
 from .spaces import HAVE_GYMNASIUM, Box, batch_space
 
 if HAVE_GYMNASIUM:
@@ -113,7 +113,7 @@ class AtacomVectorEnv(_VectorEnvBase):
         if not isinstance(safety, str):
             raise TypeError(f"safety must be a name (one of {', '.join(_core.safety_layer_names())}), "
                             f"got {type(safety).__name__}")
-        num_envs = as_count(num_envs, "num_envs")
+        num_envs = as_count(num_envs, "num_envs", maximum=MAX_ENVS)  # the CLI's --envs limit
         seed = as_seed(seed)
         if config is None:
             config = {}

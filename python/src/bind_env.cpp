@@ -18,6 +18,7 @@
 #include "atacom/safe_env.hpp"
 #include "atacom/safety_layer.hpp"
 #include "bindings.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom::py_bindings {
 
@@ -36,7 +37,8 @@ const char* reduce_name(InfoReduce r) {
 class PyEnv {
  public:
   PyEnv(const std::string& name, int num_envs, const std::string& safety, const std::string& config_json) {
-    if (num_envs < 1) throw std::invalid_argument("num_envs must be >= 1, got " + std::to_string(num_envs));
+    if (num_envs < 1 || num_envs > limits::kMaxEnvs)
+      throw std::invalid_argument("num_envs must be an integer in [1, 2^20], got " + std::to_string(num_envs));
     nlohmann::json config = nlohmann::json::parse(config_json);
     safety_ = parse_safety_layer(safety);
     env_ = make_env(EnvRequest{name, num_envs, safety_, config});
@@ -186,6 +188,14 @@ void bind_env(py::module_& m) {
               py::gil_scoped_release release;
               std::istringstream in(in_bytes);
               e.env().load_state(in);
+              // The snapshot is the whole of the bytes: anything after it is not one of save_state()'s.
+              if (in.peek() != std::char_traits<char>::eof()) {
+                const auto at = static_cast<size_t>(in.tellg());
+                throw std::invalid_argument("load_state: " + std::to_string(in_bytes.size() - at) +
+                                            " bytes after the snapshot's end (at byte " + std::to_string(at) +
+                                            " of " + std::to_string(in_bytes.size()) +
+                                            "); pass exactly the bytes save_state() returned");
+              }
             } catch (...) {
               // A snapshot that fails half-way leaves a half-loaded env: put the old state back.
               std::istringstream in(backup);

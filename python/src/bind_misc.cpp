@@ -9,6 +9,7 @@
 #include "atacom/safety_layer.hpp"
 #include "bindings.hpp"
 #include "src/core/data_dir.hpp"
+#include "src/core/limits.hpp"
 
 namespace atacom::py_bindings {
 
@@ -43,8 +44,16 @@ class RandomStreams {
 }  // namespace
 
 void bind_misc(py::module_& m) {
-  m.def("set_num_threads", &set_num_threads, py::arg("threads"),
-        "limit the worker threads of the C++ side (0 = all cores); results do not depend on it");
+  m.def(
+      "set_num_threads",
+      [](int threads) {
+        if (threads < 0 || threads > limits::kMaxThreads)
+          throw std::invalid_argument("threads must be an integer in [0, 1024], got " + std::to_string(threads));
+        set_num_threads(threads);
+      },
+      py::arg("threads"),
+      "limit the worker threads of the C++ side (0 = all cores, at most 1024); results do not depend on it "
+      "(atacom.set_num_threads also clamps to the cores)");
   m.def("num_threads", &num_threads);
   m.def("set_data_dir", &set_data_dir, py::arg("dir"),
         "directory of the project's data files, used when ATACOM_DATA_DIR is unset");

@@ -22,7 +22,7 @@ def test_result_shapes_dtypes_and_access():
     assert r["lambda"] is lam and r.lambda_ is lam and r.a is a
     np.testing.assert_allclose(r.qdot, p["f"] + np.einsum("inm,im->in", p["G"], a), atol=1e-12)
     assert np.all((lam >= 0) & (lam <= 1))
-    inside = (status & 1) == 0  # bit 1: the correction alone leaves [-1, 1]^m, then a = b
+    inside = (status & 1) == 0  # bit 1: the correction alone leaves [-1, 1]^m (then scaled into it)
     assert inside.sum() > 32
     assert np.all(np.abs(a[inside]) <= 1 + 1e-12)
     assert np.all(lam[~inside] == 0)
@@ -118,5 +118,5 @@ def test_projector_outputs_are_read_only_inputs_writable():
     proj.alpha[...] = 1.0
     with pytest.raises(ValueError, match="read-only"):
         proj.a[...] = 0
-    with pytest.raises(ValueError, match="N must be >= 1"):
+    with pytest.raises(ValueError, match=r"N must be an integer in \[1, 2\^31 - 1\]"):
         atacom.Projector(0, 2, 2, 1)

@@ -1,11 +1,11 @@
 // atacom render: one episode as a self-contained HTML page (docs/render.md).
-#include <fstream>
 #include <iostream>
 
 #include "atacom/env_registry.hpp"
 #include "atacom/safety_layer.hpp"
 #include "cli/command.hpp"
 #include "cli/flag_checks.hpp"
+#include "cli/json_file.hpp"
 #include "src/core/limits.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/experiments/render.hpp"
@@ -43,15 +43,8 @@ const RegisterCommand reg{
          a->cfg.which = a->which == "best" ? RunPolicy::Best : RunPolicy::Final;
          if (a->cfg.env.empty() && a->cfg.policy != "trained")
            throw std::invalid_argument("--env is required (unless --policy trained)");
-         if (!a->config_file.empty()) {
-           std::ifstream in(a->config_file);
-           if (!in) throw std::runtime_error("cannot read config file '" + a->config_file + "'");
-           try {
-             a->cfg.env_config = nlohmann::json::parse(in);
-           } catch (const nlohmann::json::exception& e) {
-             throw std::runtime_error("config file '" + a->config_file + "' is not valid JSON: " + e.what());
-           }
-         }
+         // The one strict reader: duplicate keys, a directory, a file above 64 MiB or nesting deeper than 64 are errors.
+         if (!a->config_file.empty()) a->cfg.env_config = read_json_file(a->config_file);
          const RenderResult r = render_episode(a->cfg);
          write_file_atomic(a->out, r.html);
          std::cout << nlohmann::json{{"out", a->out},

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "src/report/report.hpp"
 
 namespace atacom::cli {
@@ -12,11 +13,11 @@ const RegisterCommand reg{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto o = std::make_shared<ReportOptions>();
       app.add_option("DIR", o->dir, "sweep directory (atacom sweep --out)")->required();
-      app.add_option("--resamples", o->resamples, "bootstrap resamples of the tables' intervals")
-          ->check(CLI::Range(100, 1000000));
-      app.add_option("--curve-resamples", o->curve_resamples, "bootstrap resamples per learning-curve point")
-          ->check(CLI::Range(10, 100000));
-      app.add_option("--bootstrap-seed", o->seed, "bootstrap seed");
+      add_number_flag(app, "--resamples", o->resamples, range::closed(100, 1000000),
+                      "bootstrap resamples of the tables' intervals");
+      add_number_flag(app, "--curve-resamples", o->curve_resamples, range::closed(10, 100000),
+                      "bootstrap resamples per learning-curve point");
+      add_number_flag(app, "--bootstrap-seed", o->seed, seed_range<uint64_t>(), "bootstrap seed");
       return [o]() {
         const ReportResult r = write_report(*o);
         std::cout << "report: " << r.finished << " of " << r.runs << " runs finished";

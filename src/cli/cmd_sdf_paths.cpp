@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "train/sdf_path_accuracy.hpp"
 
 namespace {
@@ -17,9 +18,11 @@ atacom::cli::RegisterCommand reg(
            ->check(CLI::IsMember({"table", "shelf", "hri"}));
        app.add_option("--field", c->field, "obstacle (the env's object: table, shelf, hri's human) | body (the TIAGo body)")
            ->check(CLI::IsMember({"obstacle", "body"}));
-       app.add_option("--steps", c->steps, "env steps over all envs")->check(CLI::Range(1L, 100000000L));
-       app.add_option("--envs", c->envs, "parallel envs")->check(CLI::Range(1, 65536));
-       app.add_option("--seed", c->seed, "seed of the envs and the random alpha");
+       atacom::cli::add_number_flag(app, "--steps", c->steps, atacom::range::closed(1L, 100000000L),
+                                    "env steps over all envs");
+       atacom::cli::add_number_flag(app, "--envs", c->envs, atacom::range::closed(1, 65536), "parallel envs");
+       atacom::cli::add_number_flag(app, "--seed", c->seed, atacom::cli::seed_range<uint64_t>(),
+                                    "seed of the envs and the random alpha");
        app.add_option("--safety", c->safety, "atacom | none (raw random actions)")->check(CLI::IsMember({"atacom", "none"}));
        app.add_option("--split", c->split, "hri: motion split (train | test)")->check(CLI::IsMember({"train", "test"}));
        return [c] {

@@ -4,7 +4,9 @@
 #include <iostream>
 
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "cli/json_file.hpp"
+#include "src/core/limits.hpp"
 #include "train/redsdf_train.hpp"
 
 namespace {
@@ -12,23 +14,26 @@ namespace {
 struct SdfTrainArgs {
   std::string object, out, config_file, hidden;
   int epochs = 0, patience = 0, surface_points = 0, batch = 0;
-  double budget_s = 0, lr = 0, align_weight = -1;
-  int64_t seed = -1, data_seed = -1;
+  double budget_s = 0, lr = 0, align_weight = 0;
+  int64_t seed = 0, data_seed = 0;
+  // Which flags were given (a flag overrides the config; unset ones leave it).
+  bool set_epochs = false, set_patience = false, set_points = false, set_batch = false, set_budget = false,
+       set_lr = false, set_align = false, set_seed = false, set_data_seed = false;
   bool quiet = false;
   std::string argv_line;
 };
 
+// "64,64,64": each width a whole decimal integer in [1, 8192] (the MLP's limit).
 std::vector<int> parse_widths(const std::string& s) {
   std::vector<int> w;
   size_t i = 0;
-  while (i < s.size()) {
+  while (i <= s.size()) {
     size_t j = s.find(',', i);
     if (j == std::string::npos) j = s.size();
-    try {
-      w.push_back(std::stoi(s.substr(i, j - i)));
-    } catch (const std::exception&) {
-      throw std::invalid_argument("--hidden '" + s + "': expected comma-separated widths, e.g. 64,64,64,64");
-    }
+    w.push_back(atacom::parse_flag_value<int>("--hidden", std::string_view(s).substr(i, j - i),
+                                              atacom::range::closed(1, atacom::limits::kMaxMlpWidth)));
+    if (w.size() > size_t(atacom::limits::kMaxMlpLayers))
+      throw std::invalid_argument("--hidden: more than " + std::to_string(atacom::limits::kMaxMlpLayers) + " widths");
     i = j + 1;
   }
   return w;
@@ -66,15 +71,15 @@ int run(SdfTrainArgs& a) {
     c.arch.hidden = parse_widths(a.hidden);
     c.arch.validate();
   }
-  if (a.epochs > 0) c.max_epochs = a.epochs;
-  if (a.patience > 0) c.patience = a.patience;
-  if (a.surface_points > 0) c.data.surface_points = a.surface_points;
-  if (a.batch > 0) c.batch = a.batch;
-  if (a.budget_s > 0) c.budget_s = a.budget_s;
-  if (a.lr > 0) c.lr = a.lr;
-  if (a.align_weight >= 0) c.align_weight = a.align_weight;
-  if (a.seed >= 0) c.init_seed = uint64_t(a.seed);
-  if (a.data_seed >= 0) c.data.seed = uint64_t(a.data_seed);
+  if (a.set_epochs) c.max_epochs = a.epochs;
+  if (a.set_patience) c.patience = a.patience;
+  if (a.set_points) c.data.surface_points = a.surface_points;
+  if (a.set_batch) c.batch = a.batch;
+  if (a.set_budget) c.budget_s = a.budget_s;
+  if (a.set_lr) c.lr = a.lr;
+  if (a.set_align) c.align_weight = a.align_weight;
+  if (a.set_seed) c.init_seed = uint64_t(a.seed);
+  if (a.set_data_seed) c.data.seed = uint64_t(a.data_seed);
   const nlohmann::json man = atacom::train_sdf(c, a.out, a.argv_line, !a.quiet);
   std::cout << nlohmann::json{{"object", c.object}, {"out", a.out}, {"stop", man.at("stop")},
                               {"epochs", man.at("epochs")}, {"seconds", man.at("seconds")},
@@ -94,19 +99,26 @@ atacom::cli::RegisterCommand reg(
        app.add_option("--out", a->out, "output directory (weights, manifest, progress.csv, learning curve)")->required();
        app.add_option("--config", a->config_file, "JSON overrides of the training config (see docs/sdf.md)");
        app.add_option("--hidden", a->hidden, "hidden widths, trunk first, e.g. 64,64,64,64");
-       app.add_option("--epochs", a->epochs, "most epochs")->check(CLI::PositiveNumber);
-       app.add_option("--patience", a->patience, "early-stopping patience, epochs")->check(CLI::PositiveNumber);
-       app.add_option("--surface-points", a->surface_points, "surface samples (each shifted by every epsilon)")
-           ->check(CLI::Range(1, 1 << 22));
-       app.add_option("--batch", a->batch, "batch size")->check(CLI::Range(16, 1 << 16));
-       app.add_option("--lr", a->lr, "initial Adam learning rate")->check(CLI::Range(1e-7, 1.0));
-       app.add_option("--align-weight", a->align_weight,
-                      "weight of the gradient-alignment loss term (mean sin^2 of the angle between grad d and the "
-                      "normal; default 0 = off)")
-           ->check(CLI::Range(0.0, 1000.0));
-       app.add_option("--budget-s", a->budget_s, "wall-clock limit of the epoch loop, s")->check(CLI::PositiveNumber);
-       app.add_option("--seed", a->seed, "weight init and batch order seed")->check(CLI::NonNegativeNumber);
-       app.add_option("--data-seed", a->data_seed, "data sampling seed")->check(CLI::NonNegativeNumber);
+       using atacom::cli::add_number_flag;
+       namespace range = atacom::range;
+       add_number_flag(app, "--epochs", a->epochs, range::closed(1, 100000), "most epochs (default: the config's)",
+                       &a->set_epochs);
+       add_number_flag(app, "--patience", a->patience, range::closed(1, 100000), "early-stopping patience, epochs",
+                       &a->set_patience);
+       add_number_flag(app, "--surface-points", a->surface_points, range::closed(1, 1 << 22),
+                       "surface samples (each shifted by every epsilon)", &a->set_points);
+       add_number_flag(app, "--batch", a->batch, range::closed(16, 1 << 16), "batch size", &a->set_batch);
+       add_number_flag(app, "--lr", a->lr, range::open_closed(0.0, 1.0), "initial Adam learning rate", &a->set_lr);
+       add_number_flag(app, "--align-weight", a->align_weight, range::closed(0.0, 1000.0),
+                       "weight of the gradient-alignment loss term (mean sin^2 of the angle between grad d and the "
+                       "normal; 0 = off)",
+                       &a->set_align);
+       add_number_flag(app, "--budget-s", a->budget_s, range::open_closed(0.0, 1e6),
+                       "wall-clock limit of the epoch loop, s", &a->set_budget);
+       add_number_flag(app, "--seed", a->seed, atacom::cli::seed_range<int64_t>(), "weight init and batch order seed",
+                       &a->set_seed);
+       add_number_flag(app, "--data-seed", a->data_seed, atacom::cli::seed_range<int64_t>(), "data sampling seed",
+                       &a->set_data_seed);
        app.add_flag("--quiet", a->quiet, "no progress lines");
        // The numeric flags default to the object's config (below), not to the placeholders they hold.
        for (CLI::Option* o : app.get_options())

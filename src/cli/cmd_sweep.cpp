@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli/command.hpp"
+#include "cli/flag_checks.hpp"
 #include "src/core/config_json.hpp"
 #include "src/sweep/sweep_local.hpp"
 #include "src/sweep/sweep_slurm.hpp"
@@ -24,6 +25,7 @@ struct SweepArgs {
   SlurmOptions so;
   std::string slurm_task;
   int task_offset = 0;
+  bool jobs_set = false, threads_set = false, max_parallel_set = false;  // (their defaults depend on the machine)
   std::vector<CLI::Option*> slurm_opts;
 };
 
@@ -74,12 +76,11 @@ const RegisterCommand reg{Command{
       auto a = std::make_shared<SweepArgs>();
       app.add_option("SPEC", a->spec, "sweep spec (JSON: envs, algos, seeds, steps, num_envs, overrides)");
       app.add_option("--out", a->out, "sweep directory (runs/, logs/, sweep.json; reuse it to resume)");
-      app.add_option("--jobs", a->jobs, "runs at a time (default: one per core)")
-          ->check(CLI::Range(1, 4096))
+      add_number_flag(app, "--jobs", a->jobs, range::closed(1, 4096), "runs at a time (default: one per core)",
+                      &a->jobs_set)
           ->default_str(std::to_string(default_sweep_jobs()));
-      app.add_option("--threads-per-run", a->threads_per_run, "worker threads of each run (default: cores / jobs)")
-          ->check(CLI::Range(1, 4096))
-          ->default_str("");
+      add_number_flag(app, "--threads-per-run", a->threads_per_run, range::closed(1, 4096),
+                      "worker threads of each run (default: cores / jobs)", &a->threads_set);
       app.add_option("--shard", a->shard, "run only part i of n (cells k with k mod n = i), e.g. 0/4");
       app.add_flag("--dry-run", a->dry_run,
                    "list the runs and an estimated cost (from measured steps/s, data/sweep_rates.json) without "
@@ -88,22 +89,21 @@ const RegisterCommand reg{Command{
       a->slurm_opts = {
           app.add_option("--partition", a->so.partition, "Slurm partition"),
           app.add_option("--time", a->so.time, "Slurm time limit per task (e.g. 1-12:00:00)"),
-          app.add_option("--cpus-per-task", a->so.cpus_per_task, "cores per task (its runs share them)")
-              ->check(CLI::Range(1, 4096)),
+          add_number_flag(app, "--cpus-per-task", a->so.cpus_per_task, range::closed(1, 4096),
+                          "cores per task (its runs share them)"),
           app.add_option("--mem", a->so.mem, "Slurm memory per node (e.g. 4G)"),
           app.add_option("--account", a->so.account, "Slurm account"),
-          app.add_option("--max-parallel", a->so.max_parallel, "tasks running at once (--array=0-N%K; default: no limit)")
-              ->check(CLI::Range(1, 1000000))
-              ->default_str(""),
+          add_number_flag(app, "--max-parallel", a->so.max_parallel, range::closed(1, 1000000),
+                          "tasks running at once (--array=0-N%K; default: no limit)", &a->max_parallel_set),
           app.add_option("--sbatch-arg", a->so.sbatch_args, "extra sbatch option, one per flag (repeatable)"),
-          app.add_option("--runs-per-task", a->so.runs_per_task, "runs per array task")->check(CLI::Range(1, 100000)),
-          app.add_option("--presignal", a->so.presignal_s,
-                         "seconds before the time limit for the checkpoint signal (--signal=B:USR1@S)")
-              ->check(CLI::Range(10, 65535))};
+          add_number_flag(app, "--runs-per-task", a->so.runs_per_task, range::closed(1, 100000), "runs per array task"),
+          add_number_flag(app, "--presignal", a->so.presignal_s, range::closed(10, 65535),
+                          "seconds before the time limit for the checkpoint signal (--signal=B:USR1@S)")};
       app.add_option("--slurm-task", a->slurm_task, "(inside an array task) the tasks file of the submission")
           ->group("");
-      app.add_option("--task-offset", a->task_offset, "(inside an array task) first task of this array")
-          ->check(CLI::NonNegativeNumber)->group("");
+      add_number_flag(app, "--task-offset", a->task_offset, range::closed(0, int(kMaxSweepCells)),
+                      "(inside an array task) first task of this array")
+          ->group("");
       a->status = app.add_subcommand("status", "print the state of every run of a sweep directory");
       a->status->add_option("DIR", a->status_dir, "sweep directory")->required();
       app.require_subcommand(0, 1);

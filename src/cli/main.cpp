@@ -47,9 +47,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // --help exits 0; every usage error (unknown flag, bad value, missing
-    // option: CLI11's codes 105, 106, 109, ...) exits 2, like the errors
-    // the subcommands find themselves.
+    // --help and --version exit 0; every usage error (an unknown flag, a value
+    // out of range, a missing option) exits 2, like every other input error.
     const int rc = app.exit(e) == 0 ? 0 : 2;
     return stdout_written() ? rc : 2;
   }

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "src/core/fs_util.hpp"
+
 namespace atacom {
 
 std::string printable_text(std::string_view s, size_t max_bytes) {
@@ -84,6 +86,10 @@ nlohmann::json parse_json_strict(std::string_view text, const std::string& what)
     }
     return true;
   };
+  // The parser takes a NUL byte for the end of its input ("{...}\0garbage" would
+  // read as valid); a NUL is never valid JSON text, so it is refused where it is.
+  if (const size_t nul = text.find('\0'); nul != std::string_view::npos)
+    throw std::invalid_argument(what + " is not valid JSON: a NUL byte at offset " + std::to_string(nul));
   try {
     return json::parse(text.begin(), text.end(), cb);
   } catch (const json::exception& e) {
@@ -118,6 +124,19 @@ nlohmann::json read_json_file(const std::string& path, const std::string& what) 
   }
   if (f.bad()) throw std::invalid_argument("cannot read " + name + ": read error");
   return parse_json_strict(text, name);
+}
+
+}  // namespace atacom
+
+namespace atacom {
+
+nlohmann::json read_json_below(const std::string& base, const std::string& rel, const std::string& what,
+                               size_t max_bytes) {
+  std::string why;
+  const std::optional<std::string> text = read_below(base, rel, max_bytes, &why);
+  const std::string name = what + " '" + printable_text(base + "/" + rel) + "'";
+  if (!text) throw std::invalid_argument("cannot read " + name + ": it " + why);
+  return parse_json_strict(*text, name);
 }
 
 }  // namespace atacom

@@ -65,6 +65,13 @@ nlohmann::json read_json_file(const std::string& path, const std::string& what =
 std::string unknown_key_message(const std::string& key_path, const std::string& section,
                                 const std::vector<std::string>& valid);
 
+// A JSON file of a received directory (a sweep's or a run's): base/rel read
+// through no symlink, a regular file of at most max_bytes (read_below,
+// src/core/fs_util.hpp), parsed with parse_json_strict. Throws
+// std::invalid_argument naming the file and the reason.
+nlohmann::json read_json_below(const std::string& base, const std::string& rel, const std::string& what,
+                               size_t max_bytes = kMaxConfigFileBytes);
+
 // ---------------------------------------------------------------- values
 
 // The value of `x` as T if it is a number inside `r` (integers: an integer of

@@ -9,6 +9,9 @@
 #include <fstream>
 #include <stdexcept>
 #include <string_view>
+#include <vector>
+#include <algorithm>
+#include <optional>
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -114,6 +117,164 @@ void write_file_atomic(const std::string& path, const std::string& data) {
   if (const long k = g_kill_at_write.load(); k > 0 && g_writes.fetch_add(1) + 1 == k) ::raise(SIGKILL);
   if (::rename(tmp.c_str(), path.c_str()) != 0) fail("rename");
   fsync_parent_dir(path);
+}
+
+bool create_file_exclusive(const std::string& path, const std::string& data) {
+  std::string tmp = path + ".tmp." + std::to_string(::getpid()) + ".XXXXXX";
+  const int fd = ::mkostemp(tmp.data(), O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error("cannot write '" + path + "': create temp file: " + std::strerror(errno));
+  auto fail = [&](const std::string& what) {
+    const std::string err = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    throw std::runtime_error("cannot write '" + path + "': " + what + ": " + err);
+  };
+  bool ok = ::fchmod(fd, 0644) == 0;
+  for (size_t off = 0; ok && off < data.size();) {
+    const ssize_t w = ::write(fd, data.data() + off, data.size() - off);
+    if (w < 0 && errno == EINTR) continue;
+    ok = w >= 0;
+    if (ok) off += size_t(w);
+  }
+  ok = ok && ::fsync(fd) == 0;
+  if (::close(fd) != 0) ok = false;
+  if (!ok) fail("write");
+  // link(2) never replaces an entry: the first of two racing creators wins, whole.
+  if (::link(tmp.c_str(), path.c_str()) != 0) {
+    if (errno == EEXIST) {
+      ::unlink(tmp.c_str());
+      return false;
+    }
+    fail("link");
+  }
+  ::unlink(tmp.c_str());
+  fsync_parent_dir(path);
+  return true;
+}
+
+namespace {
+
+// The components of a relative path; nullopt when one is ".." or the path is absolute.
+std::optional<std::vector<std::string>> components(const std::string& rel) {
+  std::vector<std::string> out;
+  if (!rel.empty() && rel.front() == '/') return std::nullopt;
+  size_t i = 0;
+  while (i <= rel.size()) {
+    const size_t j = std::min(rel.find('/', i), rel.size());
+    const std::string part = rel.substr(i, j - i);
+    if (part == "..") return std::nullopt;
+    if (!part.empty() && part != ".") out.push_back(part);
+    i = j + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string linked_component(const std::string& base, const std::string& rel) {
+  const auto parts = components(rel);
+  if (!parts) return rel;
+  std::string at = base.empty() ? "." : base, shown;
+  for (size_t i = 0; i < parts->size(); ++i) {
+    at += "/" + (*parts)[i];
+    shown += (shown.empty() ? "" : "/") + (*parts)[i];
+    struct stat st;
+    if (::lstat(at.c_str(), &st) != 0) return "";  // missing: nothing below it either
+    if (S_ISLNK(st.st_mode)) return shown;
+    if (i + 1 < parts->size() && !S_ISDIR(st.st_mode)) return shown;
+  }
+  return "";
+}
+
+void require_no_links(const std::string& base, const std::string& rel, const std::string& what) {
+  const std::string bad = linked_component(base, rel);
+  if (bad.empty()) return;
+  throw std::invalid_argument(what + " '" + base + "': '" + bad +
+                              "' is a symbolic link (or not a directory); a received directory is data and its links "
+                              "are never followed: remove it (docs/security.md)");
+}
+
+int open_below(const std::string& base, const std::string& rel, int flags, std::string* why, unsigned mode) {
+  auto fail = [&](const std::string& w) {
+    if (why) *why = w;
+    return -1;
+  };
+  const auto parts = components(rel);
+  if (!parts || parts->empty()) return fail("is not a path below the directory");
+  int dfd = ::open(base.empty() ? "." : base.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0) return fail(errno == ENOENT ? "does not exist" : std::string("cannot be opened: ") + std::strerror(errno));
+  for (size_t i = 0; i + 1 < parts->size(); ++i) {
+    const int next = ::openat(dfd, (*parts)[i].c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    const int err = errno;
+    struct stat st;
+    const bool link = next < 0 && ::fstatat(dfd, (*parts)[i].c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISLNK(st.st_mode);
+    ::close(dfd);
+    if (next < 0)
+      return fail(link ? "is below a symbolic link ('" + (*parts)[i] + "')"
+                       : err == ENOENT  ? "does not exist"
+                       : err == ENOTDIR ? "is below a file that is not a directory"
+                                        : std::string("cannot be opened: ") + std::strerror(err));
+    dfd = next;
+  }
+  const std::string& last = parts->back();
+  const int fd = ::openat(dfd, last.c_str(), flags | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK, mode);
+  const int err = errno;
+  struct stat st;
+  const bool link = fd < 0 && ::fstatat(dfd, last.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISLNK(st.st_mode);
+  ::close(dfd);
+  if (fd < 0)
+    return fail(link || err == ELOOP ? "is a symbolic link"
+                : err == ENOENT      ? "does not exist"
+                                     : std::string("cannot be opened: ") + std::strerror(err));
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return fail("is not a regular file (a FIFO, device or directory)");
+  }
+  // Back to blocking reads and writes on the regular file (O_NONBLOCK only kept open() from waiting).
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  return fd;
+}
+
+std::optional<std::string> read_below(const std::string& base, const std::string& rel, size_t max_bytes,
+                                      std::string* why, bool tail) {
+  const int fd = open_below(base, rel, O_RDONLY, why);
+  if (fd < 0) return std::nullopt;
+  struct stat st;
+  if (::fstat(fd, &st) != 0) {
+    ::close(fd);
+    if (why) *why = std::string("cannot be read: ") + std::strerror(errno);
+    return std::nullopt;
+  }
+  off_t start = 0;
+  if (size_t(st.st_size) > max_bytes) {
+    if (!tail) {
+      ::close(fd);
+      if (why)
+        *why = "is " + std::to_string(st.st_size) + " bytes, more than the limit of " + std::to_string(max_bytes);
+      return std::nullopt;
+    }
+    start = st.st_size - off_t(max_bytes);
+  }
+  std::string text;
+  char buf[1 << 16];
+  while (text.size() < max_bytes) {  // a file that grows while read stops at the cap
+    const ssize_t n = ::pread(fd, buf, std::min(sizeof(buf), max_bytes - text.size()), start + off_t(text.size()));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      if (why) *why = std::string("cannot be read: ") + std::strerror(errno);
+      ::close(fd);
+      return std::nullopt;
+    }
+    if (n == 0) break;
+    text.append(buf, size_t(n));
+  }
+  ::close(fd);
+  return text;
+}
+
+bool regular_file_below(const std::string& base, const std::string& rel) {
+  if (!linked_component(base, rel).empty()) return false;
+  struct stat st;
+  return ::lstat((base + "/" + rel).c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
 int remove_stale_temp_files(const std::string& dir) {

@@ -10,6 +10,7 @@
 // through. Temp files a killed process left behind are removed by
 // remove_stale_temp_files() when the same run starts again.
 #pragma once
+#include <optional>
 #include <string>
 
 namespace atacom {
@@ -26,6 +27,45 @@ void write_file_atomic(const std::string& path, const std::string& data);
 // everything else are left alone. A missing directory is not an error.
 // Returns how many files it removed.
 int remove_stale_temp_files(const std::string& dir);
+
+// Creates `path` holding `data` only if no entry of that name exists: a
+// complete temp file is link(2)ed to the name, so of two processes creating
+// the same file at once exactly one wins, and the name never shows a partial
+// file. Returns false (and leaves the entry alone) when the name exists, a
+// symlink included. Throws std::runtime_error naming the path otherwise.
+bool create_file_exclusive(const std::string& path, const std::string& data);
+
+// ---- Received directories (a sweep's, a run's): data, never followed.
+// A path `rel` below a trusted `base` (the directory the user named) is
+// opened one component at a time with O_NOFOLLOW: a symbolic link anywhere
+// below `base` is refused, never followed; files are opened O_NONBLOCK and
+// must be regular (a FIFO never blocks, /dev/zero is never read).
+
+// The first component of `rel` below `base` that is a symbolic link (or,
+// short of the last one, not a directory), as a relative path; "" when
+// there is none. Components that do not exist end the walk.
+std::string linked_component(const std::string& base, const std::string& rel);
+
+// Throws std::invalid_argument "<what> '<base>': '<component>' is a symbolic
+// link (...)" when linked_component() finds one.
+void require_no_links(const std::string& base, const std::string& rel, const std::string& what);
+
+// Opens base/rel with `flags` (| O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK) through
+// no symlink and checks that it is a regular file. Returns the descriptor,
+// or -1 with *why set to what the file is ("does not exist", "is a symbolic
+// link", "is not a regular file (a FIFO, device or directory)", "cannot be
+// opened: <the system's reason>").
+int open_below(const std::string& base, const std::string& rel, int flags, std::string* why, unsigned mode = 0644);
+
+// The bytes of the regular file base/rel, at most max_bytes of them: a larger
+// file is refused ("is N bytes, more than the limit of M"), unless
+// `tail` (then its last max_bytes are returned). nullopt with *why set when
+// it cannot be read (open_below's reasons).
+std::optional<std::string> read_below(const std::string& base, const std::string& rel, size_t max_bytes,
+                                      std::string* why = nullptr, bool tail = false);
+
+// True when base/rel is a regular file reached through no symlink (lstat).
+bool regular_file_below(const std::string& base, const std::string& rel);
 
 // Crash-consistency tests only: after arm_kill_at_write(n) the n-th
 // write_file_atomic of this process (counted from the call) kills the

@@ -20,6 +20,7 @@ constexpr int kMaxMlpWidth = 8192;                  // one hidden layer
 constexpr int kMaxMlpLayers = 16;                   // hidden layers
 constexpr int64_t kMaxMlpParams = int64_t{1} << 27; // parameters of one network (512 MB as float)
 constexpr int kMaxThreads = 1024;                   // --threads (above the machine's count: clamped)
+constexpr int kMaxRenderSteps = 10'000;             // `atacom render`: steps of the one episode a page shows
 
 // `atacom filter`
 constexpr int64_t kFilterDefaultLineBytes = int64_t{4} << 20;  // longest input line by default (4 MiB)

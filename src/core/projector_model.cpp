@@ -36,6 +36,16 @@ BasisType parse_basis_type(const std::string& s) {
   throw std::invalid_argument("unknown basis '" + printable_text(s) + "' (projected, smooth)");
 }
 
+std::string bound_rule_name(BoundRule r) {
+  return r == BoundRule::CorrectionFirst ? "correction_first" : "tangent_scale";
+}
+
+BoundRule parse_bound_rule(const std::string& s) {
+  if (s == "tangent_scale") return BoundRule::TangentScale;
+  if (s == "correction_first") return BoundRule::CorrectionFirst;
+  throw std::invalid_argument("unknown bound rule '" + printable_text(s) + "' (tangent_scale, correction_first)");
+}
+
 int ProjectorModel::num_equality() const {
   int e = 0;
   for (auto v : equality) e += v != 0;
@@ -74,6 +84,7 @@ ProjectorModel default_projector_model(int n, int m, int k, int p) {
   model.beta.assign(static_cast<size_t>(std::max(k, 0)), 3.0);
   model.tol.assign(static_cast<size_t>(std::max(k, 0)), 1e-6);
   model.equality.assign(static_cast<size_t>(std::max(k, 0)), 0);
+  model.bounds = BoundRule::CorrectionFirst;  // issue 31: a per-component clip of the correction let a row oscillate
   return model;
 }
 
@@ -92,13 +103,14 @@ void to_json(nlohmann::json& j, const ProjectorModel& model) {
                      {"equality", eq},
                      {"K_c", model.K_c},
                      {"basis", basis_type_name(model.basis)},
+                     {"bounds", bound_rule_name(model.bounds)},
                      {"g_form", model.g_form == GForm::Diagonal ? "diagonal" : "dense"},
                      {"has_drift", model.has_drift}};
 }
 
 void from_json(const nlohmann::json& j, ProjectorModel& model) {
   static const char* known[] = {"n", "m", "k", "p", "slack", "beta", "tol", "equality",
-                                "K_c", "basis", "g_form", "has_drift"};
+                                "K_c", "basis", "bounds", "g_form", "has_drift"};
   if (!j.is_object()) throw std::invalid_argument("projector model: expected a JSON object");
   for (auto it = j.begin(); it != j.end(); ++it) {
     if (std::find_if(std::begin(known), std::end(known), [&](const char* s) { return it.key() == s; }) ==
@@ -119,6 +131,7 @@ void from_json(const nlohmann::json& j, ProjectorModel& model) {
   }
   if (j.contains("K_c")) out.K_c = j.at("K_c").get<double>();
   if (j.contains("basis")) out.basis = parse_basis_type(j.at("basis").get<std::string>());
+  if (j.contains("bounds")) out.bounds = parse_bound_rule(j.at("bounds").get<std::string>());
   if (j.contains("g_form")) {
     const auto g = j.at("g_form").get<std::string>();
     if (g == "dense") out.g_form = GForm::Dense;

@@ -111,8 +111,17 @@ ReferenceOutput project_reference(const ProjectorModel& model, const ReferenceIn
   bool bias_out = false;
   out.lambda = tangent_scale(b.data(), t.data(), m, &bias_out);
   if (bias_out) out.status |= kStatusBiasOutOfBounds;
-  out.a = b + out.lambda * t;
-  const Eigen::VectorXd us = out.b.tail(k_ineq) + out.lambda * (out.N.bottomRows(k_ineq) * alpha);
+  Eigen::VectorXd us = out.b.tail(k_ineq) + out.lambda * (out.N.bottomRows(k_ineq) * alpha);
+  if (bias_out && model.bounds == BoundRule::CorrectionFirst) {
+    // The correction scaled into the box as a whole; the slack controls
+    // still satisfy every row exactly, J_G a + A u_s = -r.
+    out.a = b / b.cwiseAbs().maxCoeff();
+    const Eigen::VectorXd resid = out.rhs + JG * out.a;
+    for (int i = 0; i < k; ++i)
+      if (slack_col[i] >= 0) us(slack_col[i]) = -resid(i) / Ju(i, m + slack_col[i]);
+  } else {
+    out.a = b + out.lambda * t;
+  }
   for (int i = 0; i < k; ++i)
     if (slack_col[i] >= 0) out.slack_u(i) = us(slack_col[i]);
   return out;

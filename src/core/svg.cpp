@@ -4,15 +4,19 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <tuple>
 
 #include "src/core/fs_util.hpp"
 
 namespace atacom {
 
 namespace {
+// Pixel coordinates: always a finite number in the file (a value far outside
+// the plot lands far outside the picture, never as "nan" or "inf").
 std::string num(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.2f", v);
+  if (!(v == v)) v = 0;
+  std::snprintf(buf, sizeof(buf), "%.2f", std::clamp(v, -1e7, 1e7));
   return buf;
 }
 }  // namespace
@@ -40,11 +44,28 @@ std::string format_tick(double v) {
   return buf;
 }
 
-SvgCanvas::SvgCanvas(double width, double height, double x0, double x1, double y0, double y1, double margin)
-    : w_(width), h_(height), x0_(x0), x1_(x1 > x0 ? x1 : x0 + 1), y0_(y0), y1_(y1 > y0 ? y1 : y0 + 1), m_(margin) {}
+namespace {
+// A data range to map: finite and of positive width (else [lo, lo + 1], or [0, 1]).
+std::pair<double, double> usable_range(double lo, double hi) {
+  if (!std::isfinite(lo)) lo = std::isfinite(hi) ? hi - 1 : 0;
+  if (!std::isfinite(hi) || !(hi > lo)) hi = std::nextafter(lo, INFINITY) > lo + 1 ? std::nextafter(lo, INFINITY) : lo + 1;
+  return {lo, hi};
+}
+}  // namespace
 
-double SvgCanvas::px(double x) const { return m_ + (x - x0_) / (x1_ - x0_) * (w_ - 2 * m_); }
-double SvgCanvas::py(double y) const { return h_ - m_ - (y - y0_) / (y1_ - y0_) * (h_ - 2 * m_); }
+SvgCanvas::SvgCanvas(double width, double height, double x0, double x1, double y0, double y1, double margin)
+    : w_(width), h_(height), m_(margin) {
+  std::tie(x0_, x1_) = usable_range(x0, x1);
+  std::tie(y0_, y1_) = usable_range(y0, y1);
+}
+
+// In long double: the width of [-1e308, 1e308] does not overflow.
+double SvgCanvas::px(double x) const {
+  return double(m_ + ((long double)x - x0_) / ((long double)x1_ - x0_) * (w_ - 2 * m_));
+}
+double SvgCanvas::py(double y) const {
+  return double(h_ - m_ - ((long double)y - y0_) / ((long double)y1_ - y0_) * (h_ - 2 * m_));
+}
 
 void SvgCanvas::line(double xa, double ya, double xb, double yb, const std::string& color, double stroke,
                      const std::string& dash) {
@@ -64,7 +85,7 @@ void SvgCanvas::polyline(const std::vector<std::pair<double, double>>& pts, cons
 
 void SvgCanvas::circle(double x, double y, double r_data, const std::string& fill, const std::string& stroke,
                        double opacity) {
-  const double r = r_data / (x1_ - x0_) * (w_ - 2 * m_);
+  const double r = double((long double)r_data / ((long double)x1_ - x0_) * (w_ - 2 * m_));
   body_ += "<circle cx=\"" + num(px(x)) + "\" cy=\"" + num(py(y)) + "\" r=\"" + num(r) + "\" fill=\"" + fill +
            "\" stroke=\"" + stroke + "\" fill-opacity=\"" + num(opacity) + "\"/>\n";
 }
@@ -96,20 +117,30 @@ void SvgCanvas::label(double x, double y, const std::string& s, double size, con
 }
 
 std::vector<double> nice_ticks(double lo, double hi, int target) {
-  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return {lo};
-  const double raw = (hi - lo) / std::max(1, target);
-  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
+  if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi > lo)) return {std::isfinite(lo) ? lo : 0.0};
+  target = std::clamp(target, 1, 50);
+  // long double: hi - lo of [-1e308, 1e308] does not overflow.
+  const long double raw = ((long double)hi - lo) / target;
+  const long double mag = std::pow(10.0L, std::floor(std::log10(raw)));
+  long double step = mag;
+  for (long double m : {1.0L, 2.0L, 5.0L, 10.0L})
     if (m * mag >= raw) {
       step = m * mag;
       break;
     }
+  // Ticks k * step for the integers k in [k0, k1]. A counter, not a double
+  // stepped by 1 (above 2^53 that never moves on); a step below the values'
+  // resolution (500 vs 499.99999999999994) gives the ends only.
+  const long double k0 = std::ceil(lo / step - 1e-9L), k1 = std::floor(hi / step + 1e-9L);
+  constexpr long double kMaxTicks = 1000;
+  if (!(k1 - k0 < kMaxTicks) || std::abs(k0) > 0x1p52L || std::abs(k1) > 0x1p52L) return {lo, hi};
   std::vector<double> out;
-  for (double k = std::ceil(lo / step - 1e-9); k * step <= hi + step * 1e-9; k += 1) {
-    const double v = k * step;
-    out.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
+  for (long long i = 0; i <= (long long)(k1 - k0); ++i) {
+    long double v = (k0 + i) * step;
+    if (std::abs(v) < step * 1e-9L) v = 0;
+    if (out.empty() || double(v) != out.back()) out.push_back(double(v));
   }
+  if (out.empty()) out.push_back(lo);
   return out;
 }
 

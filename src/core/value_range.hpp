@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -113,15 +114,60 @@ template <class T> Range<T> all() { return {}; }
 }  // namespace range
 
 // Parses a whole decimal integer (no sign for unsigned T, no spaces, no
-// trailing text); nullopt when it is not one or does not fit in T.
+// trailing text, no base prefix: "010" is ten, "0x10" is refused); nullopt
+// when it is not one or does not fit in T.
 template <class T>
 std::optional<T> parse_integer(std::string_view s) {
   static_assert(std::is_integral_v<T>);
   T v{};
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.size() > 1 && s.front() == '+' && s[1] >= '0' && s[1] <= '9') s.remove_prefix(1);  // never "+-5"
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (s.empty() || ec != std::errc() || p != s.data() + s.size()) return std::nullopt;
   return v;
+}
+
+// Parses a whole decimal number ("0.5", "1e-3", "-2"; no hex, no spaces, no
+// trailing text); nullopt when it is not one or is out of double's range
+// ("1e400"). NaN and +-inf ("nan", "inf") only with allow_nonfinite.
+inline std::optional<double> parse_decimal(std::string_view s, bool allow_nonfinite = false) {
+  if (s.size() > 1 && s.front() == '+' && s[1] != '-' && s[1] != '+') s.remove_prefix(1);
+  if (s.empty()) return std::nullopt;
+  double v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, std::chars_format::general);
+  if (ec != std::errc() || p != s.data() + s.size()) return std::nullopt;
+  if (!std::isfinite(v) && !allow_nonfinite) return std::nullopt;
+  return v;
+}
+
+// The one parser of numeric flags (every subcommand's, src/cli/flag_checks.hpp,
+// and every bench program's argv): the whole text as a decimal T inside `r`,
+// else std::invalid_argument "<flag>: <text> is not <an integer in [1, 10^12]>".
+// Floating point T never takes NaN or inf (Range::contains refuses them).
+template <class T>
+T parse_flag_value(const std::string& flag, std::string_view text, const Range<T>& r) {
+  std::optional<T> v;
+  if constexpr (std::is_floating_point_v<T>) {
+    if (const std::optional<double> d = parse_decimal(text)) v = T(*d);
+  } else {
+    v = parse_integer<T>(text);
+  }
+  if (!v || !r.contains(*v)) {
+    // The text as typed, made printable and short (no raw byte reaches a message).
+    std::string shown;
+    for (size_t i = 0; i < text.size() && i < 40; ++i) {
+      const unsigned char c = static_cast<unsigned char>(text[i]);
+      if (c >= 0x20 && c < 0x7f) {
+        shown += char(c);
+      } else {
+        char b[8];
+        std::snprintf(b, sizeof(b), "\\x%02x", c);
+        shown += b;
+      }
+    }
+    if (text.size() > 40) shown += "...";
+    throw std::invalid_argument(flag + ": " + shown + " is not " + r.describe());
+  }
+  return *v;
 }
 
 }  // namespace atacom

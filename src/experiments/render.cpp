@@ -10,6 +10,7 @@
 #include "atacom/rng.hpp"
 #include "atacom/layered_env.hpp"
 #include "train/policy_source.hpp"
+#include "src/core/limits.hpp"
 #include "src/core/svg.hpp"
 #include "src/experiments/render_scene.hpp"
 #include "src/core/config_json.hpp"
@@ -168,6 +169,12 @@ RenderResult render_episode(const RenderConfig& cfg) {
   if (const auto* layered = dynamic_cast<const LayeredEnv*>(env.get())) plain = &layered->inner();
   const std::unique_ptr<RenderRecorder> rec = make_render_recorder(*plain);
   const EnvSpec& spec = env->spec();
+  // Every step is kept (frames, constraint rows) and drawn: about 11 KB of
+  // memory and 1.3 KB of page each, so the episode is bounded before it runs.
+  if (spec.horizon > limits::kMaxRenderSteps)
+    throw std::invalid_argument("render: env.horizon is " + std::to_string(spec.horizon) + " steps, more than the " +
+                                std::to_string(limits::kMaxRenderSteps) +
+                                " one page shows (each step is kept and drawn); lower env.horizon (--config)");
   Policy& policy = src.bind(spec);
   env->seed(cfg.seed);
   Rng rng(cfg.seed, 0x72656e646572ull);  // the policy's own stream ("render")

@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
+#include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/core/svg.hpp"
 #include "src/report/report_data.hpp"
@@ -46,7 +48,21 @@ std::string short_num(double v) {
 }
 // A censored statistic: +inf reads "not reached".
 std::string target_num(double v) { return std::isinf(v) && v > 0 ? "not reached" : short_num(v); }
-std::string html_escape(const std::string& s) { return svg_escape(s); }
+std::string html_escape(const std::string& s) { return svg_escape(printable_text(s, 4096)); }
+// Text for Markdown: printable bytes only, HTML's specials as entities and
+// Markdown's punctuation backslash-escaped, so a directory name is shown as
+// written, never rendered as markup, a link or a heading.
+std::string markdown_text(const std::string& s) {
+  std::string out;
+  for (char c : printable_text(s, 4096)) {
+    if (c == '<') out += "&lt;";
+    else if (c == '>') out += "&gt;";
+    else if (c == '&') out += "&amp;";
+    else if (std::string_view("\\`*_{}[]()#+-.!|~\"'").find(c) != std::string_view::npos) out += std::string("\\") + c;
+    else out += c;
+  }
+  return out;
+}
 
 struct Row {
   std::string env, algo, metric;
@@ -197,6 +213,10 @@ ReportResult write_report(const ReportOptions& opts) {
   if (res.finished == 0)
     throw std::invalid_argument("sweep directory '" + opts.dir + "' holds no finished run yet (see `atacom sweep status " +
                                 opts.dir + "`)");
+  // DIR/report is written into: a symlink (or a file) in its place is refused, never written through.
+  require_no_links(opts.dir, "report", "sweep directory");
+  if (fs::symlink_status(res.report_dir).type() != fs::file_type::not_found && !fs::is_directory(fs::symlink_status(res.report_dir)))
+    throw std::invalid_argument("sweep directory '" + opts.dir + "': 'report' is not a directory");
   fs::create_directories(res.report_dir);
   const auto out = [&](const std::string& name) { return (fs::path(res.report_dir) / name).string(); };
 
@@ -254,7 +274,7 @@ ReportResult write_report(const ReportOptions& opts) {
 
   // ---- Markdown and HTML, side by side
   std::ostringstream md, html;
-  md << "# Sweep report: " << opts.dir << "\n\n" << res.finished << " of " << res.runs << " runs finished.\n\n"
+  md << "# Sweep report: " << markdown_text(opts.dir) << "\n\n" << res.finished << " of " << res.runs << " runs finished.\n\n"
      << methods_text(d) << "\n\n";
   size_t most_seeds = 0;
   for (const Row& r : rows) most_seeds = std::max(most_seeds, r.n);

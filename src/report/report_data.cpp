@@ -4,10 +4,10 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <fstream>
 #include <sstream>
 
 #include "src/core/config_json.hpp"
+#include "src/core/fs_util.hpp"
 #include "src/sweep/sweep_state.hpp"
 
 namespace fs = std::filesystem;
@@ -81,8 +81,16 @@ std::vector<double> metric_values(const ReportData& d, const std::string& env, c
 
 namespace {
 
-void read_curves(const std::string& path, ReportRun& r) {
-  std::ifstream f(path);
+// The curves of a run's progress.csv (a regular file below the sweep
+// directory, at most kMaxProgressBytes); a missing file gives none.
+void read_curves(const std::string& dir, const std::string& rel, ReportRun& r) {
+  std::string why;
+  const std::optional<std::string> text = read_below(dir, rel, kMaxProgressBytes, &why);
+  if (!text) {
+    if (why == "does not exist") return;
+    throw std::invalid_argument("cannot read progress file '" + printable_text(dir + "/" + rel) + "': it " + why);
+  }
+  std::istringstream f(*text);
   std::string line;
   if (!std::getline(f, line)) return;
   std::vector<std::string> cols;
@@ -128,12 +136,11 @@ ReportData load_report_data(const ReportOptions& opts) {
     r.cell = c;
     const CellStatus st = cell_status(opts.dir, c);
     r.state = st.state;
-    r.log = st.log;
+    r.log = cell_log_path(c);
     r.finished = st.state == "done";
-    const fs::path run = fs::path(opts.dir) / c.run_dir();
     if (r.finished) {
-      r.summary = read_json_file((run / "summary.json").string(), "summary file");
-      read_curves((run / "progress.csv").string(), r);
+      r.summary = read_json_below(opts.dir, c.run_dir() + "/summary.json", "summary file", kMaxSummaryBytes);
+      read_curves(opts.dir, c.run_dir() + "/progress.csv", r);
     }
     d.runs.push_back(std::move(r));
   }

@@ -56,6 +56,6 @@ std::string train_cost_svg(const ReportData& d, const std::string& env);
 std::string svg_placed(const SvgCanvas& c, double x, double y);  // a canvas at (x, y) inside a bigger SVG
 std::string svg_figure(double w, double h, const std::string& title, const std::vector<std::string>& algos,
                        const std::vector<bool>& dashed, const std::string& body);  // title, legend, body
-void pad_range(double& lo, double& hi);  // 6 % padding (a degenerate range becomes +-1)
+void pad_range(double& lo, double& hi);  // 6 % padding, at least a billionth of the magnitude wide
 
 }  // namespace atacom

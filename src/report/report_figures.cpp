@@ -44,14 +44,16 @@ std::string svg_figure(double w, double h, const std::string& title, const std::
   return s + body + "</svg>\n";
 }
 
+// [lo, hi] with a margin, at least a billionth of its magnitude wide: values
+// equal but for their last bits (500 and 499.99999999999994) get a readable
+// axis, not one with ticks finer than the doubles can tell apart. Halves
+// keep hi - lo of +-1e308 finite.
 void pad_range(double& lo, double& hi) {
-  if (!(hi > lo)) {
-    lo -= 1;
-    hi += 1;
-  }
-  const double pad = 0.06 * (hi - lo);
-  lo -= pad;
-  hi += pad;
+  const double mag = std::max({std::abs(lo), std::abs(hi), 1.0});
+  const double mid = lo / 2 + hi / 2, half = std::max(hi / 2 - lo / 2, 0.5e-9 * mag);
+  const double pad = 1.06 * half;
+  lo = mid - pad;
+  hi = mid + pad;
 }
 
 namespace {

@@ -8,6 +8,16 @@
 
 namespace atacom {
 
+// Sums in long double (its range holds any sum of doubles: +-1e308 values
+// give a finite mean, never inf or NaN).
+namespace {
+long double mean_ld(std::vector<double>::const_iterator b, std::vector<double>::const_iterator e) {
+  long double s = 0;
+  for (auto it = b; it != e; ++it) s += *it;
+  return s / (long double)(e - b);
+}
+}  // namespace
+
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) throw std::invalid_argument("quantile of no values");
   std::sort(v.begin(), v.end());
@@ -15,32 +25,30 @@ double quantile(std::vector<double> v, double q) {
   const size_t lo = size_t(std::floor(h));
   const size_t hi = std::min(lo + 1, v.size() - 1);
   // Censored values are +inf: an order statistic itself, or between two equal
-  // ones, is returned as it is (inf - inf would make NaN).
+  // ones, is returned as it is (inf - inf would make NaN). The step between two
+  // finite ones in long double (1e308 - -1e308 overflows a double).
   if (h == double(lo) || v[hi] == v[lo]) return v[lo];
-  return v[lo] + (h - double(lo)) * (v[hi] - v[lo]);
+  const long double t = h - double(lo);
+  return double(v[lo] + t * ((long double)v[hi] - v[lo]));
 }
 
 double mean_of(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x;
-  return v.empty() ? std::nan("") : s / double(v.size());
+  return v.empty() ? std::nan("") : double(mean_ld(v.begin(), v.end()));
 }
 
 double sample_std(const std::vector<double>& v) {
   if (v.size() < 2) return 0.0;
-  const double m = mean_of(v);
-  double s = 0;
+  const long double m = mean_ld(v.begin(), v.end());
+  long double s = 0;
   for (double x : v) s += (x - m) * (x - m);
-  return std::sqrt(s / double(v.size() - 1));
+  return double(std::sqrt(s / (long double)(v.size() - 1)));
 }
 
 double iqm(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
   const size_t cut = v.size() / 4;
-  double s = 0;
-  for (size_t i = cut; i < v.size() - cut; ++i) s += v[i];
-  return s / double(v.size() - 2 * cut);
+  return double(mean_ld(v.begin() + long(cut), v.end() - long(cut)));
 }
 
 uint64_t bootstrap_stream(const std::string& key) {

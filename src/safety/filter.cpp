@@ -30,7 +30,8 @@ json status_flags(uint32_t st) {
 json process(const json& j) {
   if (!j.is_object()) fail("expected a JSON object");
   static const char* known[] = {"f", "G", "J_q", "c", "alpha", "J_x", "xdot", "slack", "beta",
-                                "tol", "K_c", "basis", "equality", "id", "method", "dt", "threshold", "gamma"};
+                                "tol", "K_c", "basis", "bounds", "equality", "id", "method", "dt", "threshold",
+                                "gamma"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     bool ok = false;
     for (const char* kname : known) ok = ok || it.key() == kname;
@@ -62,6 +63,10 @@ json process(const json& j) {
     return v.get<bool>() ? 1 : 0;
   });
   if (j.contains("K_c")) model.K_c = number(j.at("K_c"), "K_c");
+  if (j.contains("bounds")) {
+    if (!j.at("bounds").is_string()) fail("'bounds' must be \"correction_first\" or \"tangent_scale\"");
+    model.bounds = parse_bound_rule(j.at("bounds").get<std::string>());
+  }
   if (j.contains("basis")) {
     if (!j.at("basis").is_string()) fail("'basis' must be \"projected\" or \"smooth\"");
     model.basis = parse_basis_type(j.at("basis").get<std::string>());

@@ -36,7 +36,7 @@ std::string filter_method(const json& j) {
       throw std::invalid_argument("'method' must be \"atacom\", \"safelayer\" or \"cbf\"");
     method = v.get<std::string>();
   }
-  static const char* atacom_only[] = {"slack", "beta", "tol", "K_c", "basis", "equality"};
+  static const char* atacom_only[] = {"slack", "beta", "tol", "K_c", "basis", "bounds", "equality"};
   static const char* safelayer_only[] = {"dt", "threshold"};
   static const char* cbf_only[] = {"gamma"};
   auto refuse = [&](const char* const* keys, size_t n, const std::string& why) {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 
 #include "atacom/env_registry.hpp"
 #include "atacom/make_env.hpp"
@@ -30,7 +31,7 @@ const nlohmann::json* rate_of(const std::string& env, SafetyLayer layer) {
 }  // namespace
 
 double estimate_cell_seconds(const SweepCell& cell) {
-  const RunConfig rc = resolve_run_config(cell.config);
+  const RunConfig rc = resolve_run_config(cell.config());
   const SafetyLayer layer = run_safety_layer(rc);
   const nlohmann::json* r = rate_of(rc.train.env, layer);
   if (!r) return NAN;
@@ -51,17 +52,30 @@ double estimate_cell_seconds(const SweepCell& cell) {
   return collect / collect_per_s + (steps - collect) / train_per_s + evals * eval_steps / eval_per_s;
 }
 
-SweepCost estimate_sweep_cost(const std::vector<SweepCell>& cells) {
+SweepCost estimate_sweep_cost(const std::vector<SweepCell>& cells, const std::vector<size_t>& which) {
   SweepCost c;
   const nlohmann::json& f = rates_file();
   c.source = f.value("cpu", std::string("?")) + ", " + f.value("date", std::string("?")) + ": " +
              f.value("command", std::string("?"));
-  for (const SweepCell& cell : cells) {
-    const double s = estimate_cell_seconds(cell);
+  // A cell's seeds differ in train.seed only, which no rate depends on: one
+  // estimate per (env, algo) pair (100,000 cells would resolve 100,000 configs).
+  std::map<std::tuple<const nlohmann::json*, std::string, std::string, int64_t, int, std::string>, double> pair_seconds;
+  for (size_t k : which) {
+    const SweepCell& cell = cells.at(k);
+    const auto key = std::make_tuple(cell.base.get(), cell.env, cell.algo, cell.steps, cell.num_envs, cell.preset);
+    auto it = pair_seconds.find(key);
+    if (it == pair_seconds.end()) it = pair_seconds.emplace(key, estimate_cell_seconds(cell)).first;
+    const double s = it->second;
     if (std::isfinite(s)) c.run_seconds += s;
     else ++c.unknown;
   }
   return c;
+}
+
+SweepCost estimate_sweep_cost(const std::vector<SweepCell>& cells) {
+  std::vector<size_t> all(cells.size());
+  for (size_t k = 0; k < cells.size(); ++k) all[k] = k;
+  return estimate_sweep_cost(cells, all);
 }
 
 }  // namespace atacom

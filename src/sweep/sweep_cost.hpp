@@ -25,6 +25,8 @@ struct SweepCost {
 
 // Throws std::runtime_error when the rates file cannot be read.
 SweepCost estimate_sweep_cost(const std::vector<SweepCell>& cells);
+// The same for cells[k], k in `which` (a dry run's cells still to run, no copies).
+SweepCost estimate_sweep_cost(const std::vector<SweepCell>& cells, const std::vector<size_t>& which);
 // One cell's seconds (NaN without a measured rate).
 double estimate_cell_seconds(const SweepCell& cell);
 

@@ -4,6 +4,7 @@
 #include <sched.h>
 #include <sys/file.h>
 #include <sys/prctl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,6 +12,7 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <deque>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -20,6 +22,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/sweep/sweep_cost.hpp"
 #include "src/sweep/sweep_state.hpp"
@@ -65,11 +68,12 @@ std::string duration(double s) {
 }
 
 // The dry run's last lines: estimated run time of the cells still to run.
-std::string sweep_cost_text(const std::vector<SweepCell>& todo, int jobs, int threads) {
+std::string sweep_cost_text(const std::vector<SweepCell>& cells, const std::vector<size_t>& todo, int jobs,
+                            int threads) {
   if (todo.empty()) return "estimate: nothing left to run\n";
   SweepCost c;
   try {
-    c = estimate_sweep_cost(todo);
+    c = estimate_sweep_cost(cells, todo);
   } catch (const std::exception& e) {
     return std::string("estimate: not available (") + e.what() + ")\n";
   }
@@ -97,9 +101,16 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   const std::string& dir = opts.dir;
   const std::vector<SweepCell> cells = sweep_cells(spec);
   std::vector<size_t> mine;
-  for (size_t k = 0; k < cells.size(); ++k)
-    if (opts.cells.empty() ? opts.shard.holds(k) : std::find(opts.cells.begin(), opts.cells.end(), k) != opts.cells.end())
-      mine.push_back(k);
+  if (!opts.cells.empty()) {
+    std::vector<bool> listed(cells.size(), false);
+    for (size_t k : opts.cells)
+      if (k < cells.size()) listed[k] = true;
+    for (size_t k = 0; k < cells.size(); ++k)
+      if (listed[k]) mine.push_back(k);
+  } else {
+    for (size_t k = 0; k < cells.size(); ++k)
+      if (opts.shard.holds(k)) mine.push_back(k);
+  }
   const int jobs = opts.jobs > 0 ? opts.jobs : default_sweep_jobs();
   const int busy = std::max(1, std::min<int>(jobs, int(mine.size())));
   const int threads = opts.threads_per_run > 0 ? opts.threads_per_run : std::max(1, available_cores() / busy);
@@ -117,31 +128,36 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
       *opts.log << "sweep: " << mine.size() << " runs";
       if (opts.shard.count > 1) *opts.log << " (shard " << opts.shard.index << "/" << opts.shard.count << " of " << cells.size() << ")";
       *opts.log << ", " << jobs << " at a time, " << threads << " threads each\n";
-      std::vector<SweepCell> todo;
-      for (size_t k : mine) {
+      std::error_code ec;
+      const std::string self = fs::read_symlink("/proc/self/exe", ec).string();  // the binary it names
+      std::vector<size_t> todo;  // the cells to run, for the estimate
+      for (size_t k : mine) {  // streamed: one line in memory at a time
         const std::string st = dir.empty() ? "fresh" : run_files_state(dir, cells[k]);
         *opts.log << cells[k].name() << "  " << (st == "fresh" ? "to run" : st == "partial" ? "to resume" : "done");
         if (st != "done") {
-          todo.push_back(cells[k]);
+          todo.push_back(k);
           if (!dir.empty()) {
             *opts.log << "  ";
             std::vector<std::string> cmd = command(cells[k], st == "partial");
-            std::error_code ec;
-            if (cmd[0] == "/proc/self/exe") cmd[0] = fs::read_symlink(cmd[0], ec).string();  // the binary it names
+            if (cmd[0] == "/proc/self/exe") cmd[0] = self;
             for (const auto& s : cmd) *opts.log << " " << s;
           }
         }
         *opts.log << "\n";
       }
-      *opts.log << sweep_cost_text(todo, busy, threads);
+      *opts.log << sweep_cost_text(cells, todo, busy, threads);
     }
     return 0;
   }
+  // A received directory is data: links in place of its parts are refused before anything is written.
+  prepare_sweep_dirs(dir);
   save_or_check_spec(dir, spec);
-  for (const char* sub : {"inputs", "logs", "state", "runs"}) fs::create_directories(fs::path(dir) / sub);
   for (size_t k : mine) {  // inputs first: each cell re-runnable by hand from the start
-    const std::string p = (fs::path(dir) / "inputs" / (cells[k].name() + ".json")).string();
-    if (!fs::exists(p)) write_file_atomic(p, cells[k].config.dump(2) + "\n");
+    const std::string rel = "inputs/" + cells[k].name() + ".json";
+    require_no_links(dir, rel, "sweep directory");
+    struct stat st;
+    if (::lstat((fs::path(dir) / rel).c_str(), &st) != 0)
+      write_file_atomic((fs::path(dir) / rel).string(), cells[k].config().dump(2) + "\n");
   }
 
   g_stop_signal.store(0);
@@ -152,30 +168,36 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   sigaction(SIGTERM, &sa, &old_term);
   sigaction(SIGUSR1, &sa, &old_usr1);
 
-  std::vector<size_t> queue;
-  for (size_t k : mine)
-    if (run_files_state(dir, cells[k]) != "done") queue.push_back(k);
-  size_t next = 0;
+  // One scan of every cell's files at the start; after it each event (a run
+  // started or ended) updates its own cell only: O(1) per event, whatever
+  // the number of cells. sweep.json is rebuilt from this table every few
+  // seconds (at most a tenth of the time) and from the files at the end.
+  std::vector<CellStatus> table;
+  table.reserve(cells.size());
+  for (const SweepCell& c : cells) table.push_back(cell_status(dir, c));
+  std::deque<size_t> queue;
+  std::vector<int64_t> steps_of(cells.size(), 0);  // env steps of each of my cells as last seen
+  int64_t all_steps = 0, steps_seen = 0;
+  for (size_t k : mine) {
+    const bool done = table[k].state == "done";
+    if (!done) queue.push_back(k);
+    if (!cells[k].learns) continue;
+    all_steps += cells[k].steps;
+    steps_of[k] = done ? cells[k].steps : table[k].env_steps;
+    steps_seen += steps_of[k];
+  }
   std::vector<Child> running;
   int failed = 0, done_now = 0, stopped = 0;  // stopped: interrupted by a signal to the sweep
   const pid_t me = ::getpid();
   const auto t0 = std::chrono::steady_clock::now();
-  auto total_steps = [&]() {
-    int64_t s = 0;
-    for (size_t k : mine)
-      if (cells[k].learns) s += cells[k].steps;
-    return s;
-  };
+  // Steps of my cells now: the last seen plus what the running ones did since (O(jobs)).
   auto steps_now = [&]() {
-    int64_t s = 0;
-    for (size_t k : mine) {
-      if (!cells[k].learns) continue;
-      s += run_files_state(dir, cells[k]) == "done" ? cells[k].steps
-                                                     : run_progress_steps((fs::path(dir) / cells[k].run_dir()).string());
-    }
+    int64_t s = steps_seen;
+    for (const Child& ch : running)
+      if (cells[ch.cell].learns) s += std::max<int64_t>(0, run_progress_steps(dir, cells[ch.cell]) - steps_of[ch.cell]);
     return s;
   };
-  const int64_t all_steps = total_steps(), steps_start = steps_now();
+  const int64_t steps_start = steps_seen;
   auto last_print = t0 - std::chrono::hours(1);
   auto progress = [&](bool force) {
     if (!opts.log) return;
@@ -186,7 +208,7 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     const double el = std::chrono::duration<double>(now - t0).count();
     const int64_t s = steps_now();
     const double rate = el > 0 ? double(s - steps_start) / el : 0;
-    const size_t left = queue.size() - next;
+    const size_t left = queue.size();
     const size_t done = mine.size() - left - running.size() - size_t(failed) - size_t(stopped);
     char b[256];
     const std::string extra = (failed ? ", " + std::to_string(failed) + " failed" : std::string()) +
@@ -197,13 +219,26 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     if (opts.log_is_tty) *opts.log << "\r\033[K" << b << std::flush;
     else *opts.log << b << "\n" << std::flush;
   };
+  // sweep.json from the table: when at least 2 s and ten times its last cost have passed.
+  auto last_table = t0;
+  double table_cost_s = 0;
+  bool table_stale = true;
+  auto write_table = [&](bool force) {
+    const auto now = std::chrono::steady_clock::now();
+    const double since = std::chrono::duration<double>(now - last_table).count();
+    if (!table_stale || (!force && since < std::max(2.0, 10 * table_cost_s))) return;
+    write_sweep_json(dir, cells, table);
+    last_table = std::chrono::steady_clock::now();
+    table_cost_s = std::chrono::duration<double>(last_table - now).count();
+    table_stale = false;
+  };
 
   enum class Launch { Started, Done, Held };
   auto launch = [&](size_t k) -> Launch {
     const SweepCell& c = cells[k];
-    const std::string lock = cell_state_path(dir, c, ".lock");
-    const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd < 0) throw std::runtime_error("cannot open lock file '" + lock + "': " + std::strerror(errno));
+    std::string why;
+    const int fd = open_below(dir, cell_state_rel(c, ".lock"), O_RDWR | O_CREAT, &why);
+    if (fd < 0) throw std::runtime_error("cannot open lock file '" + cell_state_path(dir, c, ".lock") + "': it " + why);
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {  // another process runs it (or a run of a killed sweep is dying)
       ::close(fd);
       return Launch::Held;
@@ -211,17 +246,38 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     const std::string st = run_files_state(dir, c);  // again, under the lock
     if (st == "done") {
       ::close(fd);
+      table[k].state = "done";
+      table[k].env_steps = c.learns ? c.steps : 0;
+      if (c.learns) {
+        steps_seen += c.steps - steps_of[k];
+        steps_of[k] = c.steps;
+      }
       return Launch::Done;
     }
+    // Nothing below the sweep directory is followed: a planted link in the
+    // run's path is refused before anything is removed or created there.
+    require_no_links(dir, c.run_dir(), "sweep directory");
     const fs::path run = fs::path(dir) / c.run_dir();
-    if (st == "fresh" && fs::exists(run)) fs::remove_all(run);  // nothing to resume: start clean
+    if (st == "fresh" && fs::symlink_status(run).type() != fs::file_type::not_found)
+      fs::remove_all(run);  // nothing to resume: start clean (remove_all unlinks links, never follows them)
+    if (st == "partial")  // `train --resume` reads these files: regular ones only (never a link, a FIFO, a device)
+      for (const fs::directory_entry& e : fs::directory_iterator(run)) {
+        const fs::file_type t = e.symlink_status().type();
+        const std::string name = e.path().filename().string();
+        if (t != fs::file_type::regular && t != fs::file_type::directory && name.find(".tmp.") == std::string::npos)
+          throw std::invalid_argument("sweep directory '" + dir + "': '" + c.run_dir() + "/" + printable_text(name) +
+                                      "' is not a regular file (a symbolic link, FIFO or device); a run directory holds "
+                                      "regular files only: remove it (docs/security.md)");
+      }
     fs::create_directories(run.parent_path());
     const std::vector<std::string> args = command(c, st == "partial");
-    nlohmann::json rec = read_cell_state(dir, c);
-    const int attempts = rec.value("attempts", 0) + 1;
+    const int attempts = std::min(read_cell_record(dir, c).attempts, kMaxAttempts - 1) + 1;
     const std::string log = (fs::path(dir) / cell_log_path(c)).string();
-    const int log_fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-    if (log_fd < 0) throw std::runtime_error("cannot open log file '" + log + "': " + std::strerror(errno));
+    const int log_fd = open_below(dir, cell_log_path(c), O_WRONLY | O_CREAT | O_APPEND, &why);
+    if (log_fd < 0) {
+      ::close(fd);
+      throw std::runtime_error("cannot open log file '" + log + "': it " + why);
+    }
     std::string head = "=== attempt " + std::to_string(attempts) + " on " + hostname() + " at " + utc_now() + ":";
     for (const auto& s : args) head += " " + s;
     head += "\n";
@@ -246,6 +302,9 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     ::close(log_fd);
     write_cell_state(dir, c, {{"state", "running"}, {"attempts", attempts}, {"host", hostname()}, {"pid", pid},
                               {"resumed", st == "partial"}, {"started_utc", utc_now()}});
+    table[k].state = "running";
+    table[k].attempts = attempts;
+    table[k].host = hostname();
     running.push_back({k, pid, fd, attempts});
     return Launch::Started;
   };
@@ -263,19 +322,31 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
       const SweepCell& c = cells[ch.cell];
       const int code = r < 0 ? -1 : WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
       nlohmann::json rec = {{"attempts", ch.attempts}, {"host", hostname()}, {"ended_utc", utc_now()}};
-      if (code == 0 && run_files_state(dir, c) == "done") {
+      CellStatus& row = table[ch.cell];
+      const bool done = code == 0 && run_files_state(dir, c) == "done";
+      if (done) {
         rec["state"] = "done";
+        row.state = "done";
         ++done_now;
       } else if (g_stop_signal.load() != 0) {
         rec["state"] = "interrupted";
+        row.state = "interrupted";
         ++stopped;
       } else {
         rec["state"] = "failed";
         rec["exit_code"] = code == 0 ? 1 : code;
         rec["log"] = cell_log_path(c);
+        row.state = "failed";
+        row.exit_code = code == 0 ? 1 : code;
         ++failed;
       }
       write_cell_state(dir, c, rec);
+      row.env_steps = done ? (c.learns ? c.steps : 0) : run_progress_steps(dir, c);
+      if (c.learns) {
+        const int64_t now_steps = done ? c.steps : row.env_steps;
+        steps_seen += now_steps - steps_of[ch.cell];
+        steps_of[ch.cell] = now_steps;
+      }
       ::close(ch.lock_fd);
       running.erase(running.begin() + long(i));
       changed = true;
@@ -283,36 +354,37 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
     return changed;
   };
 
-  write_sweep_json(dir, cells);
+  write_table(true);
   progress(true);
-  while ((next < queue.size() || !running.empty()) && g_stop_signal.load() == 0) {
+  while ((!queue.empty() || !running.empty()) && g_stop_signal.load() == 0) {
     bool changed = false;
-    size_t held = 0;  // cells locked by another process: retried until it is done with them
-    while (int(running.size()) < jobs && next < queue.size() && g_stop_signal.load() == 0 && held < queue.size()) {
-      const Launch l = launch(queue[next]);
-      changed |= l == Launch::Started;
-      if (l == Launch::Held) {
-        queue.push_back(queue[next]);
-        ++held;
-      }
-      ++next;
-      if (l == Launch::Held && next + held >= queue.size()) break;  // only held cells left: wait a little
+    // Cells locked by another process go to the back and are retried later;
+    // a bounded number of tries per round keeps a round O(1) even when
+    // another sweep holds thousands of them.
+    for (int tries = 0; int(running.size()) < jobs && !queue.empty() && g_stop_signal.load() == 0 && tries < 64;
+         ++tries) {
+      const size_t k = queue.front();
+      queue.pop_front();
+      const Launch l = launch(k);
+      changed |= l != Launch::Held;
+      if (l == Launch::Held) queue.push_back(k);
     }
-    if (changed) write_sweep_json(dir, cells);
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    table_stale |= changed;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
     if (reap(false)) {
-      write_sweep_json(dir, cells);
+      table_stale = true;
       progress(true);
     } else {
       progress(false);
     }
+    write_table(false);
   }
   const int sig = g_stop_signal.load();
   // SIGUSR1 (pre-timeout): every run checkpoints and exits; SIGINT/SIGTERM: they stop (resume from the last checkpoint).
   if (sig != 0)
     for (const Child& ch : running) ::kill(ch.pid, sig == SIGUSR1 ? SIGUSR1 : SIGTERM);
   while (!running.empty()) reap(true);
-  write_sweep_json(dir, cells);
+  write_sweep_json(dir, cells);  // at the end, from every cell's files (other shards' cells too)
   progress(true);
   if (opts.log && opts.log_is_tty) *opts.log << "\n";
   sigaction(SIGINT, &old_int, nullptr);
@@ -324,7 +396,7 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   }
   // Cells another process ran, or still runs, count as not finished here.
   int not_done = 0;
-  for (size_t k : mine) not_done += run_files_state(dir, cells[k]) != "done";
+  for (size_t k : mine) not_done += table[k].state != "done" && run_files_state(dir, cells[k]) != "done";
   if (opts.log && failed > 0)
     *opts.log << "sweep: " << failed << " runs failed (see `atacom sweep status " << dir << "` for their logs)\n";
   return (failed > 0 || not_done > 0) ? 1 : 0;

@@ -1,11 +1,13 @@
 #include "src/sweep/sweep_slurm.hpp"
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 
@@ -88,19 +90,63 @@ std::string slurm_array_script(const std::string& dir, const std::string& sub_di
   return s;
 }
 
+namespace {
+
+// DIR/slurm/jobs.json: a list of {job_id (digits), tasks_file, offset, tasks}; std::invalid_argument naming the file otherwise.
+nlohmann::json read_jobs_file(const std::string& dir) {
+  struct stat st;
+  if (::lstat((fs::path(dir) / "slurm" / "jobs.json").c_str(), &st) != 0) return nlohmann::json::array();
+  const nlohmann::json jobs = read_json_below(dir, "slurm/jobs.json", "slurm jobs file");
+  const std::string name = "slurm jobs file '" + printable_text(dir) + "/slurm/jobs.json'";
+  if (!jobs.is_array()) throw std::invalid_argument(name + " must hold a list of jobs");
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const nlohmann::json& j = jobs[i];
+    const std::string at = name + ", job " + std::to_string(i);
+    if (!j.is_object() || !j.contains("job_id") || !j["job_id"].is_string() || !j.contains("tasks_file") ||
+        !j["tasks_file"].is_string())
+      throw std::invalid_argument(at + ": must be an object with the strings job_id and tasks_file");
+    const std::string id = j["job_id"].get<std::string>();
+    if (id.empty() || id.size() > 20 || id.find_first_not_of("0123456789") != std::string::npos)
+      throw std::invalid_argument(at + ": job_id '" + printable_text(id, 40) + "' is not a Slurm job id");
+    checked_number<int>(j.value("offset", nlohmann::json()), at + ": offset", range::closed<int>(0, int(kMaxSweepCells)));
+    checked_number<int>(j.value("tasks", nlohmann::json()), at + ": tasks", range::closed<int>(1, int(kMaxSweepCells)));
+  }
+  return jobs;
+}
+
+// The "tasks" list of a submission's tasks.json (cell indices per task), read
+// below DIR: slurm/<submission>/tasks.json (a moved sweep directory still
+// finds its own); nullopt when it is gone.
+std::optional<nlohmann::json> read_tasks_below(const std::string& dir, const std::string& tasks_file) {
+  const fs::path tf(tasks_file);
+  const std::string sub = tf.parent_path().filename().string();
+  if (tf.filename() != "tasks.json" || sub.rfind("submit-", 0) != 0) return std::nullopt;
+  const std::string rel = "slurm/" + sub + "/tasks.json";
+  struct stat st;
+  if (::lstat((fs::path(dir) / rel).c_str(), &st) != 0) return std::nullopt;
+  const nlohmann::json t = read_json_below(dir, rel, "slurm tasks file");
+  const std::string name = "slurm tasks file '" + printable_text(dir + "/" + rel) + "'";
+  if (!t.is_object() || !t.contains("tasks") || !t["tasks"].is_array())
+    throw std::invalid_argument(name + " must be an object with a list 'tasks'");
+  for (const auto& task : t["tasks"]) {
+    if (!task.is_array()) throw std::invalid_argument(name + ": every task must be a list of cell indices");
+    for (const auto& cell : task) checked_number<int64_t>(cell, name + ": a cell index", range::closed<int64_t>(0, kMaxSweepCells - 1));
+  }
+  return t["tasks"];
+}
+
+}  // namespace
+
 void add_slurm_tasks(const std::string& dir, nlohmann::json& table) {
-  const fs::path jobs_file = fs::path(dir) / "slurm" / "jobs.json";
-  if (!fs::exists(jobs_file)) return;
-  const nlohmann::json jobs = read_json_file(jobs_file.string(), "slurm jobs file");
+  const nlohmann::json jobs = read_jobs_file(dir);
+  if (jobs.empty()) return;
   nlohmann::json& runs = table.at("runs");
-  std::map<std::string, nlohmann::json> task_files;
+  std::map<std::string, std::optional<nlohmann::json>> task_files;
   for (const auto& j : jobs) {  // in submission order: the latest submission of a cell wins
     const std::string tf = j.at("tasks_file").get<std::string>();
-    if (!task_files.count(tf)) {
-      if (!fs::exists(tf)) continue;
-      task_files[tf] = read_json_file(tf, "slurm tasks file").at("tasks");
-    }
-    const nlohmann::json& tasks = task_files[tf];
+    if (!task_files.count(tf)) task_files[tf] = read_tasks_below(dir, tf);
+    if (!task_files[tf]) continue;
+    const nlohmann::json& tasks = *task_files[tf];
     const std::string id = j.at("job_id").get<std::string>();
     const int off = j.at("offset").get<int>(), n = j.at("tasks").get<int>();
     for (int i = 0; i < n && size_t(off + i) < tasks.size(); ++i)
@@ -109,7 +155,7 @@ void add_slurm_tasks(const std::string& dir, nlohmann::json& table) {
         if (k >= runs.size()) continue;
         const std::string task = id + "_" + std::to_string(i);
         runs[k]["slurm_task"] = task;
-        runs[k]["slurm_log"] = fs::relative(fs::path(tf).parent_path() / ("task-" + task + ".log"), dir).string();
+        runs[k]["slurm_log"] = "slurm/" + fs::path(tf).parent_path().filename().string() + "/task-" + task + ".log";
       }
   }
   for (auto& r : runs)
@@ -122,14 +168,18 @@ void add_slurm_tasks(const std::string& dir, nlohmann::json& table) {
 std::vector<size_t> slurm_task_cells(const std::string& tasks_file, int offset) {
   const char* id = std::getenv("SLURM_ARRAY_TASK_ID");
   if (!id || !*id) throw std::invalid_argument("--slurm-task: SLURM_ARRAY_TASK_ID is not set (run inside a Slurm array task)");
-  char* end = nullptr;
-  const long k = std::strtol(id, &end, 10);
-  if (*end != '\0' || k < 0) throw std::invalid_argument("SLURM_ARRAY_TASK_ID is not a task index");
+  const std::optional<int> k = parse_integer<int>(id);
+  if (!k || *k < 0) throw std::invalid_argument("SLURM_ARRAY_TASK_ID '" + printable_text(id, 40) + "' is not a task index");
   const nlohmann::json t = read_json_file(tasks_file, "slurm tasks file");
-  const size_t task = size_t(k) + size_t(offset);
-  if (!t.contains("tasks") || !t["tasks"].is_array() || task >= t["tasks"].size())
-    throw std::invalid_argument("slurm tasks file '" + tasks_file + "' has no task " + std::to_string(task));
-  return t["tasks"][task].get<std::vector<size_t>>();
+  const size_t task = size_t(*k) + size_t(offset);
+  if (!t.is_object() || !t.contains("tasks") || !t["tasks"].is_array() || task >= t["tasks"].size() ||
+      !t["tasks"][task].is_array())
+    throw std::invalid_argument("slurm tasks file '" + printable_text(tasks_file) + "' has no task " + std::to_string(task));
+  std::vector<size_t> cells;
+  for (const auto& cell : t["tasks"][task])
+    cells.push_back(size_t(checked_number<int64_t>(cell, "slurm tasks file '" + printable_text(tasks_file) + "': a cell index",
+                                                   range::closed<int64_t>(0, kMaxSweepCells - 1))));
+  return cells;
 }
 
 long slurm_time_seconds(const std::string& t) {
@@ -177,11 +227,12 @@ std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::st
                                   "so a task would get no work done; give --time more than presignal + 60 s");
   }
   const std::string dir = fs::absolute(dir_in).lexically_normal().string();
+  prepare_sweep_dirs(dir);
   save_or_check_spec(dir, spec);
   const fs::path slurm = fs::path(dir) / "slurm";
   fs::create_directories(slurm);
   const fs::path jobs_file = slurm / "jobs.json";
-  nlohmann::json jobs = fs::exists(jobs_file) ? read_json_file(jobs_file.string(), "slurm jobs file") : nlohmann::json::array();
+  nlohmann::json jobs = read_jobs_file(dir);
   for (const auto& j : jobs) {  // never two submissions of one sweep in the queue at once
     std::string out;
     const std::string id = j.at("job_id").get<std::string>();
@@ -203,10 +254,12 @@ std::vector<std::string> submit_sweep_slurm(const SweepSpec& spec, const std::st
     log << "sweep: every run of " << dir << " is done; nothing to submit\n";
     return {};
   }
-  for (const char* sub : {"inputs", "logs", "state", "runs"}) fs::create_directories(fs::path(dir) / sub);
   for (size_t k : pending) {
-    const std::string p = (fs::path(dir) / "inputs" / (cells[k].name() + ".json")).string();
-    if (!fs::exists(p)) write_file_atomic(p, cells[k].config.dump(2) + "\n");
+    const std::string rel = "inputs/" + cells[k].name() + ".json";
+    require_no_links(dir, rel, "sweep directory");
+    struct stat st;
+    if (::lstat((fs::path(dir) / rel).c_str(), &st) != 0)
+      write_file_atomic((fs::path(dir) / rel).string(), cells[k].config().dump(2) + "\n");
   }
   nlohmann::json tasks = nlohmann::json::array();
   for (size_t i = 0; i < pending.size(); i += size_t(o.runs_per_task)) {

@@ -12,6 +12,19 @@
 
 namespace atacom {
 
+nlohmann::json SweepCell::config() const {
+  nlohmann::json c = base ? *base : nlohmann::json::object();
+  nlohmann::json& t = c["train"];
+  if (t.is_null()) t = nlohmann::json::object();
+  t["env"] = env;
+  t["algo"] = algo;
+  t["seed"] = seed;
+  t["steps"] = steps;
+  if (num_envs > 0) t["num_envs"] = num_envs;
+  if (!preset.empty()) t["preset"] = preset;
+  return c;
+}
+
 std::string SweepCell::name() const { return env + "-" + algo + "-seed" + std::to_string(seed); }
 std::string SweepCell::run_dir() const { return "runs/" + env + "/" + algo + "/seed-" + std::to_string(seed); }
 
@@ -88,7 +101,11 @@ SweepSpec parse_sweep_spec(const nlohmann::json& j) {
       if (algo != "*" && !listed(s.algos, algo))
         throw std::invalid_argument(what + ": algo '" + printable_text(algo) + "' is not in 'algos'");
       if (!it.value().is_object()) throw std::invalid_argument(what + " must be a JSON object (a run config fragment)");
-      if (const auto t = it.value().find("train"); t != it.value().end() && t->is_object())
+      for (auto sec = it.value().begin(); sec != it.value().end(); ++sec)
+        if (!sec.value().is_object())
+          throw std::invalid_argument("sweep spec key 'overrides." + printable_text(k) + "." + printable_text(sec.key()) +
+                                      "' must be a JSON object (a config section), not " + value_text(sec.value()));
+      if (const auto t = it.value().find("train"); t != it.value().end())
         for (const char* fixed : {"env", "algo", "seed", "steps", "num_envs", "preset"})
           if (t->contains(fixed))
             throw std::invalid_argument(what + ": train." + fixed + " is set by the sweep spec, not by an override");
@@ -96,12 +113,21 @@ SweepSpec parse_sweep_spec(const nlohmann::json& j) {
     s.overrides = *o;
   }
   r.finish();
-  // Resolve every cell now: a bad override or an algo/env pair that cannot run fails here, naming the cell.
-  for (const SweepCell& c : sweep_cells(s)) {
+  const int64_t cells = int64_t(s.envs.size()) * int64_t(s.algos.size()) * int64_t(s.seeds.size());
+  if (cells > kMaxSweepCells)
+    throw std::invalid_argument("sweep spec has " + std::to_string(s.envs.size()) + " envs x " +
+                                std::to_string(s.algos.size()) + " algos x " + std::to_string(s.seeds.size()) +
+                                " seeds = " + std::to_string(cells) + " cells, more than the limit of " +
+                                std::to_string(kMaxSweepCells) + " (split it into several sweeps)");
+  // Resolve every (env, algo) pair now, with its first seed (the seeds differ in
+  // train.seed only, already checked): a bad override or a pair that cannot run
+  // fails here, naming the cell.
+  const std::vector<SweepCell> all = sweep_cells(s);
+  for (size_t i = 0; i < all.size(); i += s.seeds.size()) {
     try {
-      resolve_run_config(c.config);
+      resolve_run_config(all[i].config());
     } catch (const std::exception& e) {
-      throw std::invalid_argument("sweep cell " + printable_text(c.name()) + ": " + e.what());
+      throw std::invalid_argument("sweep cell " + printable_text(all[i].name()) + ": " + e.what());
     }
   }
   return s;
@@ -118,10 +144,11 @@ nlohmann::json sweep_spec_json(const SweepSpec& s) {
 
 std::vector<SweepCell> sweep_cells(const SweepSpec& s) {
   std::vector<SweepCell> out;
+  out.reserve(s.envs.size() * s.algos.size() * s.seeds.size());
   for (const auto& env : s.envs)
     for (const auto& algo : s.algos) {
       const Algorithm& a = find_algorithm(algo);
-      const nlohmann::json base = config_fragment(s.overrides, env, algo);
+      const auto shared = std::make_shared<const nlohmann::json>(config_fragment(s.overrides, env, algo));
       for (int64_t seed : s.seeds) {
         SweepCell c;
         c.env = env;
@@ -129,15 +156,9 @@ std::vector<SweepCell> sweep_cells(const SweepSpec& s) {
         c.seed = seed;
         c.steps = s.steps;
         c.learns = a.learns();
-        c.config = base;
-        nlohmann::json& t = c.config["train"];
-        if (t.is_null()) t = nlohmann::json::object();
-        t["env"] = env;
-        t["algo"] = algo;
-        t["seed"] = seed;
-        t["steps"] = s.steps;
-        if (s.num_envs > 0) t["num_envs"] = s.num_envs;
-        if (!s.preset.empty()) t["preset"] = s.preset;
+        c.base = shared;
+        c.num_envs = s.num_envs;
+        c.preset = s.preset;
         out.push_back(std::move(c));
       }
     }
@@ -146,21 +167,16 @@ std::vector<SweepCell> sweep_cells(const SweepSpec& s) {
 
 Shard parse_shard(const std::string& text) {
   const size_t slash = text.find('/');
-  auto bad = [&]() -> Shard {
-    throw std::invalid_argument("--shard '" + printable_text(text) + "': must be i/n with 0 <= i < n (e.g. 0/4)");
+  const auto bad = [&]() {
+    return std::invalid_argument("--shard '" + printable_text(text, 40) +
+                                 "': must be i/n with 0 <= i < n, two decimal integers, n at most " +
+                                 std::to_string(kMaxSweepCells) + " (e.g. 0/4)");
   };
-  if (slash == std::string::npos || slash == 0 || slash + 1 >= text.size()) return bad();
-  Shard s;
-  try {
-    size_t p1 = 0, p2 = 0;
-    s.index = std::stoi(text.substr(0, slash), &p1);
-    s.count = std::stoi(text.substr(slash + 1), &p2);
-    if (p1 != slash || p2 != text.size() - slash - 1) return bad();
-  } catch (const std::exception&) {
-    return bad();
-  }
-  if (s.count < 1 || s.index < 0 || s.index >= s.count) return bad();
-  return s;
+  if (slash == std::string::npos) throw bad();
+  const std::optional<int> i = parse_integer<int>(std::string_view(text).substr(0, slash));
+  const std::optional<int> n = parse_integer<int>(std::string_view(text).substr(slash + 1));
+  if (!i || !n || *n < 1 || *n > kMaxSweepCells || *i < 0 || *i >= *n) throw bad();
+  return Shard{*i, *n};
 }
 
 }  // namespace atacom

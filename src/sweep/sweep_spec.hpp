@@ -13,10 +13,13 @@
 // config, least specific first: "*/*", "<env>/*", "*/<algo>", "<env>/<algo>".
 // A wildcard key's learner sections ("sac", ...) reach only the cells whose
 // algorithm trains that learner; an exact key's must fit its cell.
-// train.env/algo/seed/steps/num_envs come from the spec only. Every cell is
-// resolved when the spec is read, so a bad override fails before any run.
+// train.env/algo/seed/steps/num_envs/preset come from the spec only; every section
+// of an override is an object. Every (env, algo) pair is resolved when the
+// spec is read (its seeds differ in train.seed only), so a bad override fails
+// before any run. At most kMaxSweepCells cells.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -24,14 +27,23 @@
 
 namespace atacom {
 
+// Most cells of one spec (envs x algos x seeds): the bookkeeping of a sweep
+// of this many costs about a kilobyte of memory and of sweep.json per cell
+// (docs/sweeps.md, "How many cells").
+constexpr int64_t kMaxSweepCells = 100'000;
+
 struct SweepCell {
   std::string env, algo;
   int64_t seed = 0;
   int64_t steps = 0;
   bool learns = true;     // false: la/random/zero runs (one evaluation, no checkpoint)
-  nlohmann::json config;  // the `atacom train --config` file of this cell
-  std::string name() const;     // "table-atacom-sac-seed3" (logs, state files)
-  std::string run_dir() const;  // "runs/table/atacom-sac/seed-3" (relative to the sweep directory)
+  // The merged overrides of (env, algo), shared by the cell's seeds (one copy per pair, not per cell).
+  std::shared_ptr<const nlohmann::json> base;
+  int num_envs = 0;
+  std::string preset;             // "": train.preset unset (the default)
+  nlohmann::json config() const;  // the `atacom train --config` file of this cell
+  std::string name() const;       // "table-atacom-sac-seed3" (logs, state files)
+  std::string run_dir() const;    // "runs/table/atacom-sac/seed-3" (relative to the sweep directory)
 };
 
 struct SweepSpec {

@@ -2,13 +2,14 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -28,60 +29,88 @@ std::string utc_now() {
   return b;
 }
 
-int64_t run_progress_steps(const std::string& run_dir) {
-  std::ifstream f(run_dir + "/progress.csv");
-  std::string line, last;
-  std::getline(f, line);  // header
-  while (std::getline(f, line))
-    if (!line.empty()) last = line;
-  if (last.empty()) return 0;
+std::optional<CellRecord> parse_cell_record(std::string_view text) {
   try {
-    return std::stoll(last.substr(0, last.find(',')));
-  } catch (const std::exception&) {
-    return 0;
+    const nlohmann::json j = parse_json_strict(text, "cell state file");
+    if (!j.is_object()) return std::nullopt;
+    CellRecord r;
+    if (const auto s = j.find("state"); s != j.end()) {
+      if (!s->is_string()) return std::nullopt;
+      r.state = s->get<std::string>();
+      if (r.state != "running" && r.state != "done" && r.state != "failed" && r.state != "interrupted")
+        return std::nullopt;
+    }
+    if (j.contains("attempts"))
+      r.attempts = checked_number<int>(j["attempts"], "attempts", range::closed(0, kMaxAttempts));
+    if (j.contains("exit_code")) r.exit_code = checked_number<int>(j["exit_code"], "exit_code", range::closed(-1, 255));
+    if (const auto h = j.find("host"); h != j.end()) {
+      if (!h->is_string() || h->get_ref<const std::string&>().size() > 255) return std::nullopt;
+      r.host = printable_text(h->get<std::string>());
+    }
+    return r;
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;
   }
 }
 
-std::string run_files_state(const std::string& sweep_dir, const SweepCell& c) {
-  const fs::path run = fs::path(sweep_dir) / c.run_dir();
-  if (fs::exists(run / "summary.json")) {
-    try {
-      const nlohmann::json s = read_json_file((run / "summary.json").string(), "summary file");
-      // A run that stopped at its quality target (train.stop_at_target) is done before its budget.
-      const nlohmann::json stopped = s.value("stopped_at_target", nlohmann::json(false));
-      if (!c.learns || s.value("env_steps", int64_t{0}) >= c.steps || stopped == true) return "done";
-    } catch (const std::exception&) {
-      // unreadable: not done; the checkpoint decides
-    }
-  }
-  if (c.learns && fs::exists(run / "checkpoint.bin") && fs::exists(run / "config.json")) return "partial";
-  return "fresh";
-}
+std::string cell_state_rel(const SweepCell& c, const char* ext) { return "state/" + c.name() + ext; }
 
 std::string cell_state_path(const std::string& sweep_dir, const SweepCell& c, const char* ext) {
-  return (fs::path(sweep_dir) / "state" / (c.name() + ext)).string();
+  return (fs::path(sweep_dir) / cell_state_rel(c, ext)).string();
 }
 
 std::string cell_log_path(const SweepCell& c) { return "logs/" + c.name() + ".log"; }
 
-nlohmann::json read_cell_state(const std::string& sweep_dir, const SweepCell& c) {
-  const std::string p = cell_state_path(sweep_dir, c, ".json");
-  if (!fs::exists(p)) return nlohmann::json::object();
-  try {
-    return read_json_file(p, "cell state file");
-  } catch (const std::exception&) {
-    return nlohmann::json::object();  // atomic writes make this rare; the run files still decide "done"
-  }
+CellRecord read_cell_record(const std::string& sweep_dir, const SweepCell& c) {
+  const std::optional<std::string> text = read_below(sweep_dir, cell_state_rel(c, ".json"), kMaxCellStateBytes);
+  if (!text) return {};
+  // Atomic writes make an unreadable record rare (a hand edit, a received directory); the run files still decide "done".
+  return parse_cell_record(*text).value_or(CellRecord{});
 }
 
 void write_cell_state(const std::string& sweep_dir, const SweepCell& c, const nlohmann::json& state) {
-  fs::create_directories(fs::path(sweep_dir) / "state");
+  fs::create_directories(fs::path(sweep_dir) / "state");  // a sweep checked it first (prepare_sweep_dirs)
   write_file_atomic(cell_state_path(sweep_dir, c, ".json"), state.dump(2) + "\n");
 }
 
+int64_t run_progress_steps(const std::string& sweep_dir, const SweepCell& c) {
+  // The last row is all this needs: the file's tail, never the whole of a large one.
+  const std::optional<std::string> text =
+      read_below(sweep_dir, c.run_dir() + "/progress.csv", kProgressTailBytes, nullptr, true);
+  if (!text) return 0;
+  size_t end = text->find_last_not_of("\r\n");
+  if (end == std::string::npos) return 0;
+  const size_t begin = text->rfind('\n', end);
+  const std::string_view last = std::string_view(*text).substr(begin == std::string::npos ? 0 : begin + 1,
+                                                               end + 1 - (begin == std::string::npos ? 0 : begin + 1));
+  if (begin == std::string::npos) return 0;  // the header alone (or a tail without a row start)
+  const std::optional<int64_t> v = parse_integer<int64_t>(last.substr(0, last.find(',')));
+  return v && *v >= 0 ? *v : 0;
+}
+
+std::string run_files_state(const std::string& sweep_dir, const SweepCell& c) {
+  const std::string run = c.run_dir();
+  if (const std::optional<std::string> text = read_below(sweep_dir, run + "/summary.json", kMaxSummaryBytes)) {
+    try {
+      const nlohmann::json s = parse_json_strict(*text, "summary file");
+      if (!c.learns) return "done";
+      // A run that stopped at its quality target (train.stop_at_target) is done before its budget.
+      if (s.is_object() && s.value("stopped_at_target", nlohmann::json(false)) == true) return "done";
+      if (s.is_object() && s.contains("env_steps") &&
+          checked_number<int64_t>(s["env_steps"], "env_steps", range::at_least<int64_t>(0)) >= c.steps)
+        return "done";
+    } catch (const std::invalid_argument&) {
+      // unreadable: not done; the checkpoint decides
+    }
+  }
+  if (c.learns && regular_file_below(sweep_dir, run + "/checkpoint.bin") &&
+      regular_file_below(sweep_dir, run + "/config.json"))
+    return "partial";
+  return "fresh";
+}
+
 bool cell_locked_elsewhere(const std::string& sweep_dir, const SweepCell& c) {
-  const std::string p = cell_state_path(sweep_dir, c, ".lock");
-  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  const int fd = open_below(sweep_dir, cell_state_rel(c, ".lock"), O_RDONLY, nullptr);
   if (fd < 0) return false;
   const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
   ::close(fd);
@@ -91,25 +120,31 @@ bool cell_locked_elsewhere(const std::string& sweep_dir, const SweepCell& c) {
 CellStatus cell_status(const std::string& sweep_dir, const SweepCell& c) {
   CellStatus st;
   const std::string files = run_files_state(sweep_dir, c);
-  const nlohmann::json rec = read_cell_state(sweep_dir, c);
-  st.attempts = rec.value("attempts", 0);
-  st.host = rec.value("host", "");
-  st.log = cell_log_path(c);
-  const std::string run = (fs::path(sweep_dir) / c.run_dir()).string();
-  st.env_steps = run_progress_steps(run);
+  const CellRecord rec = read_cell_record(sweep_dir, c);
+  st.attempts = rec.attempts;
+  st.host = rec.host;
+  st.env_steps = run_progress_steps(sweep_dir, c);
   if (files == "done") {
     st.state = "done";
     st.env_steps = c.learns ? std::max(st.env_steps, c.steps) : 0;
     return st;
   }
-  const std::string last = rec.value("state", "");
   if (cell_locked_elsewhere(sweep_dir, c)) st.state = "running";
-  else if (last == "failed") {
+  else if (rec.state == "failed") {
     st.state = "failed";
-    st.exit_code = rec.value("exit_code", 0);
-  } else if (last == "running") st.state = "interrupted";  // its process died without a word
+    st.exit_code = rec.exit_code;
+  } else if (rec.state == "running") st.state = "interrupted";  // its process died without a word
   else st.state = files == "partial" ? "partial" : "pending";
   return st;
+}
+
+nlohmann::json sweep_row(const SweepCell& c, const CellStatus& st) {
+  nlohmann::json r = {{"name", c.name()}, {"env", c.env}, {"algo", c.algo}, {"seed", c.seed},
+                      {"dir", c.run_dir()}, {"state", st.state}, {"env_steps", st.env_steps},
+                      {"steps", c.learns ? c.steps : 0}, {"log", cell_log_path(c)}, {"attempts", st.attempts}};
+  if (st.state == "failed") r["exit_code"] = st.exit_code;
+  if (!st.host.empty()) r["host"] = st.host;
+  return r;
 }
 
 nlohmann::json sweep_table(const std::string& sweep_dir, const std::vector<SweepCell>& cells) {
@@ -118,18 +153,30 @@ nlohmann::json sweep_table(const std::string& sweep_dir, const std::vector<Sweep
   for (const SweepCell& c : cells) {
     const CellStatus st = cell_status(sweep_dir, c);
     ++counts[st.state];
-    nlohmann::json r = {{"name", c.name()}, {"env", c.env}, {"algo", c.algo}, {"seed", c.seed},
-                        {"dir", c.run_dir()}, {"state", st.state}, {"env_steps", st.env_steps},
-                        {"steps", c.learns ? c.steps : 0}, {"log", st.log}, {"attempts", st.attempts}};
-    if (st.state == "failed") r["exit_code"] = st.exit_code;
-    if (!st.host.empty()) r["host"] = st.host;
-    runs.push_back(std::move(r));
+    runs.push_back(sweep_row(c, st));
   }
   return {{"updated_utc", utc_now()}, {"counts", counts}, {"runs", runs}};
 }
 
+void write_sweep_json(const std::string& sweep_dir, const std::vector<SweepCell>& cells,
+                      const std::vector<CellStatus>& statuses) {
+  std::map<std::string, int> counts;
+  std::string rows;
+  for (size_t k = 0; k < cells.size() && k < statuses.size(); ++k) {
+    ++counts[statuses[k].state];
+    rows += (k ? ",\n    " : "\n    ") + sweep_row(cells[k], statuses[k]).dump();
+  }
+  // The keys in the order a JSON tree of the same table prints them.
+  const std::string text = "{\n  \"counts\": " + nlohmann::json(counts).dump() + ",\n  \"runs\": [" + rows +
+                           (rows.empty() ? "]" : "\n  ]") + ",\n  \"updated_utc\": \"" + utc_now() + "\"\n}\n";
+  write_file_atomic((fs::path(sweep_dir) / "sweep.json").string(), text);
+}
+
 void write_sweep_json(const std::string& sweep_dir, const std::vector<SweepCell>& cells) {
-  write_file_atomic((fs::path(sweep_dir) / "sweep.json").string(), sweep_table(sweep_dir, cells).dump(2) + "\n");
+  std::vector<CellStatus> st;
+  st.reserve(cells.size());
+  for (const SweepCell& c : cells) st.push_back(cell_status(sweep_dir, c));
+  write_sweep_json(sweep_dir, cells, st);
 }
 
 std::string sweep_status_text(const nlohmann::json& table) {
@@ -157,25 +204,37 @@ std::string sweep_status_text(const nlohmann::json& table) {
   return o.str();
 }
 
+void prepare_sweep_dirs(const std::string& sweep_dir) {
+  fs::create_directories(sweep_dir);
+  for (const char* sub : {"inputs", "logs", "state", "runs", "slurm", "report"}) {
+    require_no_links(sweep_dir, sub, "sweep directory");
+    struct stat st;
+    const std::string p = (fs::path(sweep_dir) / sub).string();
+    if (::lstat(p.c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
+      throw std::invalid_argument("sweep directory '" + sweep_dir + "': '" + sub + "' is not a directory");
+    if (std::string(sub) != "slurm" && std::string(sub) != "report") fs::create_directory(p);
+  }
+}
+
 void save_or_check_spec(const std::string& sweep_dir, const SweepSpec& s) {
   const fs::path p = fs::path(sweep_dir) / "spec.json";
   const nlohmann::json now = sweep_spec_json(s);
-  if (fs::exists(p)) {
-    const nlohmann::json before = read_json_file(p.string(), "sweep spec file");
-    if (before != now)
-      throw std::invalid_argument("sweep directory '" + sweep_dir + "' holds a sweep of another spec (" + p.string() +
-                                  "); use a new --out, or the spec it was started with");
-    return;
-  }
   fs::create_directories(sweep_dir);
-  write_file_atomic(p.string(), now.dump(2) + "\n");
+  // Exclusive: of two sweeps starting at once on an empty directory, one
+  // creates spec.json and the other compares against it.
+  if (create_file_exclusive(p.string(), now.dump(2) + "\n")) return;
+  const nlohmann::json before = read_json_below(sweep_dir, "spec.json", "sweep spec file");
+  if (before != now)
+    throw std::invalid_argument("sweep directory '" + sweep_dir + "' holds a sweep of another spec (" + p.string() +
+                                "); use a new --out, or the spec it was started with");
 }
 
 SweepSpec load_sweep_spec(const std::string& sweep_dir) {
-  const fs::path p = fs::path(sweep_dir) / "spec.json";
-  if (!fs::exists(p))
+  struct stat st;
+  const std::string p = (fs::path(sweep_dir) / "spec.json").string();
+  if (::lstat(p.c_str(), &st) != 0)
     throw std::invalid_argument("'" + sweep_dir + "' is not a sweep directory (it has no spec.json)");
-  return parse_sweep_spec(read_json_file(p.string(), "sweep spec file"));
+  return parse_sweep_spec(read_json_below(sweep_dir, "spec.json", "sweep spec file"));
 }
 
 }  // namespace atacom
