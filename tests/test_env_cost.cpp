@@ -45,8 +45,12 @@ std::string slurp(const fs::path& p) {
 
 }  // namespace
 
-TEST_CASE("env cost: cost is 1 exactly when a row exceeds its tolerance or a cost event happened", "[cost]") {
-  for (const std::string& name : env_names()) {
+namespace {
+
+// Random actions through every layer of env `name`: the 0/1 cost and the
+// continuous cost against their definitions, step by step.
+void check_cost_rule(const std::string& name) {
+  {
     const bool constrained = env_entry(name).has_constraints;
     for (SafetyLayer layer : safety_layers()) {
       if (!layer.is_none() && !constrained) continue;
@@ -98,6 +102,19 @@ TEST_CASE("env cost: cost is 1 exactly when a row exceeds its tolerance or a cos
       if (layer.is_none() && name == "shelf") CHECK(event_steps > 0);
     }
   }
+}
+
+}  // namespace
+
+TEST_CASE("env cost: cost is 1 exactly when a row exceeds its tolerance or a cost event happened", "[cost]") {
+  for (const std::string& name : env_names())
+    if (name != "hri" && name != "hri-upright") check_cost_rule(name);
+}
+
+// HRI-Sim takes about 1.7 s to build per layer: slow label.
+TEST_CASE("env cost: the cost rule on HRI-Sim under every layer", "[cost][slow]") {
+  check_cost_rule("hri");
+  check_cost_rule("hri-upright");
 }
 
 TEST_CASE("env cost: a snapshot of an earlier build (continuous cost in the cost slot) loads", "[cost]") {

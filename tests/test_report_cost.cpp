@@ -17,6 +17,7 @@
 #include "src/report/report.hpp"
 #include "src/sweep/sweep_spec.hpp"
 #include "src/sweep/sweep_state.hpp"
+#include "tests/shell_run.hpp"
 #include "train/algorithms.hpp"
 
 namespace fs = std::filesystem;
@@ -44,7 +45,7 @@ TEST_CASE("report cost: sac-lag and cbf-sac through a sweep spec, with per-cell 
   int seen = 0;
   for (const SweepCell& c : sweep_cells(spec)) {
     INFO(c.name());
-    const json& cfg = c.config;
+    const json cfg = c.config();
     if (c.algo == "sac-lag") {
       CHECK(cfg["lagrangian"]["lr"] == 0.01);
       CHECK(!cfg.contains("cbf"));  // the wildcard's layer section reaches only cbf cells
@@ -130,5 +131,41 @@ TEST_CASE("report cost: cost metrics, the cost-return scatter, the training-cost
   CHECK(box.find("cost steps (training)") != std::string::npos);
   CHECK(slurp(rd + "index.html").find("cost_return") == std::string::npos);  // inline SVG, no file references
   CHECK(slurp(rd + "summary.md").find("cost_return_table.svg") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+// The names end to end: `atacom sweep` trains sac-lag and cbf-sac (and la),
+// `atacom report` reads their run files into the cost figures and tables.
+TEST_CASE("report cost: sac-lag and cbf-sac runs of a real sweep reach the report", "[report][sweep]") {
+  const fs::path dir = fs::temp_directory_path() / ("atacom_cost_sweep_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path spec = dir / "spec.json", out = dir / "sweep";
+  std::ofstream(spec) << R"({"envs": ["nav"], "algos": ["sac-lag", "cbf-sac", "la"], "seeds": [0, 1, 2], "steps": 600,
+      "num_envs": 4, "overrides": {"*/*": {"train": {"eval_every": 300, "eval_episodes": 1},
+                                           "sac": {"warmup": 200, "batch_size": 32}},
+                                   "nav/sac-lag": {"lagrangian": {"cost_limit": 1}}}})";
+  const std::string exe = ATACOM_ATACOM_EXE;
+  const ShellResult sw = run_shell(exe + " sweep " + spec.string() + " --out " + out.string() +
+                                   " --jobs 2 --threads-per-run 1 2>&1");
+  INFO(sw.out);
+  REQUIRE(sw.rc == 0);
+  const json lag = json::parse(slurp((out / "runs/nav/sac-lag/seed-0/summary.json").string()));
+  CHECK(lag["cost_limit"] == 1.0);
+  CHECK(lag.contains("train_cost"));
+  CHECK(lag.contains("eval_cost_mean"));
+  const std::string progress = slurp((out / "runs/nav/sac-lag/seed-0/progress.csv").string());
+  CHECK(progress.substr(0, progress.find('\n')).find("lagrange_multiplier") != std::string::npos);
+  const ShellResult rep = run_shell(exe + " report " + out.string() + " 2>&1");
+  INFO(rep.out);
+  REQUIRE(rep.rc == 0);
+  const fs::path rd = out / "report";
+  REQUIRE(fs::exists(rd / "cost_return_nav.svg"));
+  REQUIRE(fs::exists(rd / "train_cost_nav.svg"));
+  const std::string csv = slurp((rd / "summary.csv").string());
+  for (const char* row : {"nav,sac-lag,train_cost,3,", "nav,cbf-sac,train_cost,3,", "nav,sac-lag,eval_cost_mean,3,",
+                          "nav,cbf-sac,eval_cost_mean,3,"})
+    CHECK(csv.find(row) != std::string::npos);
+  CHECK(count(slurp((rd / "train_cost_nav.svg").string()), ">cbf-sac</text>") >= 2);
   fs::remove_all(dir);
 }
