@@ -1,5 +1,6 @@
-// bench_sac: SAC gradient updates/s, actor actions/s, Adam parameters/s, the machine's
-// single-precision GEMM rate and its FMA peak, as JSON lines.
+// bench_sac: SAC gradient updates/s, PPO update samples/s, actor actions/s, Adam
+// parameters/s, the machine's single-precision GEMM rate and its FMA peak, as
+// JSON lines.
 //
 //   build/bench/bench_sac [--quick]
 //
@@ -23,6 +24,7 @@
 #include "atacom/parallel.hpp"
 #include "kernels/eigen_exact_gemm.hpp"
 #include "train/adam.hpp"
+#include "train/ppo.hpp"
 #include "train/replay_buffer.hpp"
 #include "train/sac.hpp"
 #include "bench_common.hpp"
@@ -245,7 +247,7 @@ void bench_gemm_tile(const char* form, int m, int k, int n) {
 // The cores' float32 FMA peak: 12 independent multiply-add chains per thread
 // on Eigen's widest float packet, 2 FLOP per lane. `gflops` is per thread, so
 // it compares with gemm_peak's and with sac_update's per-core rate.
-void bench_fma_peak(int threads) {
+double bench_fma_peak(int threads, bool print = true) {
   set_num_threads(threads);
   namespace ei = Eigen::internal;
   using P = ei::packet_traits<float>::type;
@@ -266,8 +268,53 @@ void bench_fma_peak(int threads) {
   };
   const double per_s = best_rate(run);
   const double flops_per_thread = double(kSteps) * kChains * kLanes * 2.0;
-  bench::emit({{"bench", "fma_peak"}, {"threads", threads}, {"lanes", kLanes}, {"per_s", per_s * flops_per_thread * threads},
-               {"gflops", per_s * flops_per_thread * 1e-9}});
+  if (print)
+    bench::emit({{"bench", "fma_peak"}, {"threads", threads}, {"lanes", kLanes},
+                 {"per_s", per_s * flops_per_thread * threads}, {"gflops", per_s * flops_per_thread * 1e-9}});
+  return per_s * flops_per_thread * 1e-9;
+}
+
+// One PPO update (train/ppo.hpp) over a full rollout of N envs x T steps
+// with random data (obs 16, act 7: TableEnv's shapes): the value pass, GAE,
+// and `epochs` passes of minibatches (forward, backward and Adam of actor and
+// critic). per_s: samples through a gradient step per second (N T epochs /
+// seconds per update); gflops: every GEMM of the update as the tapes run
+// them; share_of_fma_peak: gflops over fma_peak's per-thread rate x threads,
+// measured in this process just before.
+void bench_ppo_update(int N, int T, const std::vector<int>& hidden, Activation act, int minibatch, int threads,
+                      double fma_gflops) {
+  set_num_threads(threads);
+  const int D = 16, A = 7;
+  PpoConfig cfg = default_ppo_config();
+  cfg.actor.hidden = cfg.critic.hidden = hidden;
+  cfg.actor.activation = cfg.critic.activation = act;
+  cfg.rollout_steps = T;
+  cfg.minibatch_size = minibatch;
+  Ppo ppo(D, A, cfg, 1);
+  PpoRollout roll;
+  roll.resize(T, N, D, A);
+  Rng r(7, 0);
+  for (auto& v : roll.obs) v = float(r.uniform(-1, 1));
+  for (auto& v : roll.sample) v = float(r.uniform(-1.5, 1.5));
+  for (auto& v : roll.logp) v = float(r.uniform(-12, -8));
+  for (auto& v : roll.reward) v = float(r.uniform(-1, 0));
+  for (auto& v : roll.last_obs) v = float(r.uniform(-1, 1));
+  roll.steps = T;
+  auto update = [&]() {
+    // lr 0: every call does the same work on the same parameters
+    ppo.update(roll, 0.0, 0.0);
+  };
+  update();
+  const double f0 = ppo.gemm_flops();
+  update();
+  const double flops = ppo.gemm_flops() - f0;
+  const double calls = best_rate(update);
+  const double gflops = flops * calls * 1e-9;
+  bench::emit({{"bench", "ppo_update"}, {"obs", D}, {"act", A}, {"hidden", hidden},
+               {"activation", activation_name(act)}, {"N", N}, {"T", T},
+               {"epochs", cfg.epochs}, {"minibatch", minibatch}, {"threads", threads},
+               {"per_s", calls * double(N) * T * cfg.epochs}, {"updates_per_s", calls}, {"flops", flops},
+               {"gflops", gflops}, {"share_of_fma_peak", gflops / (fma_gflops * threads)}, {"cpu", bench::cpu_name()}});
 }
 
 }  // namespace
@@ -277,7 +324,7 @@ int main(int argc, char** argv) {
   std::string only;
   int batch_only = 0, threads_only = 0;
   auto usage = []() {
-    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|actor_act|adam_step|gemm_peak|gemm_tile|fma_peak]\n"
+    std::fprintf(stderr, "usage: bench_sac [--quick] [--only sac_update|ppo_update|actor_act|adam_step|gemm_peak|gemm_tile|fma_peak]\n"
                          "                 [--batch B] [--threads T] [--repeats R] [--window SECONDS]\n");
     return 2;
   };
@@ -288,7 +335,7 @@ int main(int argc, char** argv) {
       window_s = 0.3;
     } else if (!std::strcmp(argv[i], "--only") && has_value) {
       only = argv[++i];
-      if (only != "sac_update" && only != "actor_act" && only != "adam_step" && only != "gemm_peak" &&
+      if (only != "sac_update" && only != "ppo_update" && only != "actor_act" && only != "adam_step" && only != "gemm_peak" &&
           only != "gemm_tile" && only != "fma_peak")
         return usage();
     } else if (!std::strcmp(argv[i], "--batch") && has_value) {
@@ -311,6 +358,21 @@ int main(int argc, char** argv) {
   if (want("sac_update"))
     for (int threads : thread_list)
       for (int B : batch_list) bench_sac_update(B, threads);
+  if (want("ppo_update"))
+    for (int threads : thread_list) {
+      const double peak = bench_fma_peak(threads, false);
+      // PPO's defaults on 128 envs (the preset cells' N: 64-64 ReLU, T 16,
+      // minibatches of 512), the same at 256-256, and large rollouts and
+      // minibatches (1024 envs x T 32, 4096) with ReLU and tanh.
+      struct Case { int N, T; std::vector<int> hidden; Activation act; int minibatch; };
+      const std::vector<Case> cases = {{128, 16, {64, 64}, Activation::Relu, 512},
+                                        {128, 16, {256, 256}, Activation::Relu, 512},
+                                        {1024, 32, {64, 64}, Activation::Relu, 4096},
+                                        {1024, 32, {64, 64}, Activation::Tanh, 4096},
+                                        {1024, 32, {256, 256}, Activation::Relu, 4096}};
+      for (const Case& c : cases)
+        bench_ppo_update(c.N, c.T, c.hidden, c.act, batch_only ? batch_only : c.minibatch, threads, peak);
+    }
   if (want("actor_act"))
     for (int threads : thread_list)
       for (int N : {1, 1024, 16384}) bench_actor_act(N, threads);

@@ -73,6 +73,9 @@ json small(const std::string& algo, int64_t steps) {
   const Algorithm& a = find_algorithm(algo);
   if (a.learner == "sac") cfg["sac"] = sac;
   if (a.learner == "adversary") cfg["adversary"] = {{"sac", sac}};
+  // PPO: rollouts of 16 batch steps (32 transitions), two minibatches, two epochs
+  if (a.learner == "ppo")
+    cfg["ppo"] = {{"actor", net}, {"critic", net}, {"rollout_steps", 16}, {"minibatch_size", 16}, {"epochs", 2}};
   return cfg;
 }
 
@@ -99,9 +102,9 @@ bool layer_available(SafetyLayer s) {
 
 TEST_CASE("algorithms: every name is an action source under a safety layer", "[algorithms]") {
   const std::vector<std::string> names = algorithm_names();
-  for (const char* n : {"sac", "atacom-sac", "safelayer-sac", "la", "la-atacom", "la-safelayer", "random",
-                        "random-atacom", "random-safelayer", "zero", "zero-atacom", "zero-safelayer", "attack",
-                        "attack-atacom", "attack-safelayer"})
+  for (const char* n : {"sac", "atacom-sac", "safelayer-sac", "ppo", "atacom-ppo", "safelayer-ppo", "la",
+                        "la-atacom", "la-safelayer", "random", "random-atacom", "random-safelayer", "zero",
+                        "zero-atacom", "zero-safelayer", "attack", "attack-atacom", "attack-safelayer"})
     CHECK(std::find(names.begin(), names.end(), n) != names.end());
   CHECK(find_algorithm("atacom-sac").source == ActionSource::Learner);
   CHECK(find_algorithm("atacom-sac").learner == "sac");
@@ -110,12 +113,15 @@ TEST_CASE("algorithms: every name is an action source under a safety layer", "[a
   CHECK(find_algorithm("la").source == ActionSource::Attractor);
   CHECK(find_algorithm("la-atacom").safety == SafetyLayer::Atacom);
   CHECK(find_algorithm("attack").learner == "adversary");
+  CHECK(find_algorithm("ppo").learner == "ppo");
+  CHECK(find_algorithm("atacom-ppo").safety == SafetyLayer::Atacom);
+  CHECK(find_algorithm("safelayer-ppo").safety == SafetyLayer::SafeLayer);
   CHECK(find_algorithm("attack").safety == SafetyLayer::None);
   CHECK(algorithm_for(ActionSource::Learner, "adversary", SafetyLayer::Atacom).name == "attack-atacom");
   // each (source, learner, layer) once
   for (const Algorithm& a : algorithms())
     CHECK(algorithm_for(a.source, a.learner, a.safety).name == a.name);
-  CHECK_THROWS_WITH(find_algorithm("ppo"), Catch::Contains("la-atacom") && Catch::Contains("ppo"));
+  CHECK_THROWS_WITH(find_algorithm("trpo"), Catch::Contains("la-atacom") && Catch::Contains("trpo"));
   // a learner section that is not the algorithm's is refused
   json cfg = small("la", 100);
   cfg["sac"] = json::object();
@@ -141,7 +147,8 @@ TEST_CASE("algorithms: the shipped run configs (configs/*.json) still resolve", 
 }
 
 TEST_CASE("algorithms: every learner checkpoints, resumes bitwise and is identical for 1 and 2 threads", "[algorithms]") {
-  for (const char* name : {"sac", "atacom-sac", "safelayer-sac", "attack", "attack-atacom", "attack-safelayer"}) {
+  for (const char* name : {"sac", "atacom-sac", "safelayer-sac", "ppo", "atacom-ppo", "safelayer-ppo", "attack",
+                           "attack-atacom", "attack-safelayer"}) {
     INFO("algo " << name);
     const Algorithm& a = find_algorithm(name);
     if (!layer_available(a.safety)) {

@@ -76,7 +76,7 @@ TEST_CASE("config: an unknown key lists the valid keys of its section", "[config
   // the train section (ConfigReader), the env (merge_config_strict, nested too), the top level, a learner section
   CHECK_THROWS_WITH(resolve_run_config({{"train", {{"stepz", 3}}}}),
                     "unknown config key 'train.stepz' (valid keys of 'train': env, algo, seed, steps, num_envs, "
-                    "eval_every, eval_episodes, eval_deterministic, checkpoint_every)");
+                    "eval_every, eval_episodes, eval_deterministic, checkpoint_every, preset, stop_at_target)");
   CHECK_THROWS_WITH(resolve_run_config({{"env", {{"gravity", 1}}}}),
                     Catch::StartsWith("unknown config key 'env.gravity' (valid keys of 'env': ") &&
                         Catch::Contains("horizon"));

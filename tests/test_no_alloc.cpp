@@ -14,6 +14,9 @@
 #include "atacom/projector.hpp"
 #include "kernels/redsdf_batch.hpp"
 #include "atacom/rng.hpp"
+#include "atacom/env_registry.hpp"
+#include "atacom/make_env.hpp"
+#include "train/ppo_learner.hpp"
 #include "build_kind.hpp"
 
 #if ATACOM_TEST_SANITIZED
@@ -163,5 +166,52 @@ TEST_CASE("no allocation: learned SDF batched inference after construction", "[a
   for (int rep = 0; rep < 3; ++rep) batch.evaluate(p.data(), pose.data(), false, n, d.data(), g.data());
   const long allocs = g_allocs.load() - before;
   CHECK(allocs == 0);
+#endif
+}
+
+// PPO's side of a training step: the learner's sampled act over N envs and
+// observe(), whose last call of a rollout runs the update (value pass, GAE,
+// minibatch epochs with both tapes and Adam). Two rollouts warm up the
+// tapes' arenas (the minibatches come in two sizes). The env step between
+// them is not counted: the projector's per-thread scratch is sized the first
+// time a thread runs it, which a TBB worker may first do after any warm-up
+// (2 allocations, seen in about 1 run of 5 on a loaded host).
+TEST_CASE("no allocation: PPO act, observe and update after warm-up", "[alloc]") {
+#if !ATACOM_COUNT_ALLOCS
+  SUCCEED("allocation counting disabled under AddressSanitizer");
+#else
+  const int N = 300;
+  PpoConfig c = default_ppo_config();
+  c.rollout_steps = 4;
+  c.epochs = 2;
+  c.minibatch_size = 170;  // 1200 rows: 7 minibatches of 171 and 172 rows
+  c.value_clip_range = 0.5;
+  for (const auto mode : {LogStdMode::StateIndependent, LogStdMode::StateDependent}) {
+    c.log_std = mode;
+    auto env = make_env(EnvRequest{"table", N, SafetyLayer::Atacom});
+    env->seed(1);
+    const LearnerContext ctx{&env->spec(), N, 1, &env->buffers()};
+    PpoLearner learner(ctx, c);
+    std::vector<Rng> rngs;
+    for (int i = 0; i < N; ++i) rngs.emplace_back(1, uint64_t(i));
+    std::vector<float> obs = env->buffers().obs;
+    std::vector<double> act(size_t(N) * 7);
+    long allocs = 0;  // in act() and observe()
+    auto step = [&]() {
+      long a0 = g_allocs.load();
+      learner.policy().act(obs.data(), N, false, rngs.data(), act.data());
+      allocs += g_allocs.load() - a0;
+      env->step(act.data());
+      a0 = g_allocs.load();
+      learner.observe(obs.data(), act.data(), env->buffers());
+      allocs += g_allocs.load() - a0;
+      std::copy(env->buffers().obs.begin(), env->buffers().obs.end(), obs.begin());
+    };
+    for (int k = 0; k < 2 * c.rollout_steps; ++k) step();
+    allocs = 0;
+    for (int k = 0; k < 2 * c.rollout_steps; ++k) step();
+    REQUIRE(learner.updates() == 4 * 2 * 7);
+    CHECK(allocs == 0);
+  }
 #endif
 }

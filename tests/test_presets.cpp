@@ -116,6 +116,30 @@ TEST_CASE("presets: wildcard sections reach only the cells that use them, and th
   CHECK(rc.learner["target_entropy"] == -10.0);   // the paper preset's table entry
 }
 
+TEST_CASE("presets: PPO's tuned settings are preset cells over PPO's generic defaults", "[presets]") {
+  // The tuned keys (docs/training.md, "PPO on the envs") reach the PPO cells
+  // of the four envs under every layer, in the fast preset and in the paper
+  // preset (the default: the paper has no PPO); the learner defaults stay generic.
+  for (const char* preset : {"paper", "fast"})
+    for (const char* env : {"table", "shelf", "hri", "nav"})
+      for (const char* algo : {"ppo", "atacom-ppo", "safelayer-ppo"}) {
+        INFO(preset << " " << env << "/" << algo);
+        const RunConfig rc = resolve_run_config({{"train", {{"env", env}, {"algo", algo}, {"preset", preset}}}});
+        CHECK(rc.train.num_envs == 128);
+        CHECK(rc.learner["gamma"] == 0.98);
+        CHECK(rc.learner["epochs"] == 5);
+        CHECK(rc.learner["minibatch_size"] == 256);
+        CHECK(rc.learner["rollout_steps"] == 16);  // PPO's default, not the preset's
+      }
+  const json d = learner_entry("ppo").default_config();
+  CHECK(d["gamma"] == 0.99);
+  CHECK(d["epochs"] == 10);
+  CHECK(d["minibatch_size"] == 512);
+  const RunConfig pend = resolve_run_config({{"train", {{"env", "pendulum"}, {"algo", "ppo"}, {"preset", "fast"}}}});
+  CHECK(pend.learner["gamma"] == 0.99);
+  CHECK(pend.train.num_envs == TrainConfig{}.num_envs);
+}
+
 TEST_CASE("safety layers: one table, algorithm names are sources x layers, sections only where the layer runs",
           "[presets][algorithms]") {
   const auto& t = safety_layer_entries();

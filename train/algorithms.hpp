@@ -6,6 +6,7 @@
 //
 //   source \ layer      none        atacom           safelayer        ...
 //   SAC learner         sac         atacom-sac       safelayer-sac
+//   PPO learner         ppo         atacom-ppo       safelayer-ppo
 //   linear attractor    la          la-atacom        la-safelayer
 //   random actions      random      random-atacom    random-safelayer
 //   zero actions        zero        zero-atacom      zero-safelayer
@@ -36,7 +37,7 @@ struct Algorithm {
   std::string name;         // "atacom-sac"
   ActionSource source;
   SafetyLayer safety;
-  std::string learner;      // learner registry name when source == Learner ("sac", "adversary"), else ""
+  std::string learner;      // learner registry name when source == Learner ("sac", "ppo", "adversary"), else ""
   std::string help;
   bool learns() const { return source == ActionSource::Learner; }
 };

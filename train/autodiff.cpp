@@ -50,8 +50,10 @@ void for_elems(int64_t n, Fn&& fn) {
   parallel_blocks(n, kParallelElems / 2, fn);
 }
 
-void check(bool ok, const char* op, const std::string& what) {
-  if (!ok) throw std::invalid_argument(std::string("autodiff ") + op + ": " + what);
+// The message is built only on failure: a check that passes allocates nothing.
+template <class Msg>
+void check(bool ok, const char* op, Msg&& what) {
+  if (!ok) throw std::invalid_argument(std::string("autodiff ") + op + ": " + std::string(what()));
 }
 
 // float tiles go to the Eigen-exact kernel where it takes them (the same
@@ -167,16 +169,17 @@ template <class T>
 typename Tape<T>::Id Tape<T>::linear(Id xi, Id wi, Id bi, int groups, bool relu) {
   const Node& x = node(xi);
   const Node& w = node(wi);
-  check(groups >= 1 && w.rows % groups == 0, "linear", "weight rows " + std::to_string(w.rows) +
-        " not divisible by groups " + std::to_string(groups));
+  check(groups >= 1 && w.rows % groups == 0, "linear", [&] {
+    return "weight rows " + std::to_string(w.rows) + " not divisible by groups " + std::to_string(groups);
+  });
   const int in = w.rows / groups, out = w.cols, B = x.rows;
   const bool shared = groups > 1 && x.cols == in;
   check(x.cols == in * groups || shared, "linear",
-        "input " + shape(x.rows, x.cols) + " does not match weight " + shape(w.rows, w.cols));
+        [&] { return "input " + shape(x.rows, x.cols) + " does not match weight " + shape(w.rows, w.cols); });
   if (bi >= 0) {
     const Node& b = node(bi);
-    check(b.rows == 1 && b.cols == out * groups, "linear", "bias " + shape(b.rows, b.cols) + " expected " +
-          shape(1, out * groups));
+    check(b.rows == 1 && b.cols == out * groups, "linear",
+          [&] { return "bias " + shape(b.rows, b.cols) + " expected " + shape(1, out * groups); });
   }
   const bool ng = x.needs_grad || w.needs_grad || (bi >= 0 && node(bi).needs_grad);
   Node y = make(Op::Linear, B, out * groups, ng);
@@ -337,7 +340,7 @@ typename Tape<T>::Id Tape<T>::binary(Op op, Id ai, Id bi) {
   const Node& b = node(bi);
   const char* name = op == Op::Add ? "add" : op == Op::Sub ? "sub" : op == Op::Mul ? "mul" : "minimum";
   check((a.rows == b.rows || a.rows == 1 || b.rows == 1) && (a.cols == b.cols || a.cols == 1 || b.cols == 1),
-        name, "cannot broadcast " + shape(a.rows, a.cols) + " with " + shape(b.rows, b.cols));
+        name, [&] { return "cannot broadcast " + shape(a.rows, a.cols) + " with " + shape(b.rows, b.cols); });
   Node y = make(op, std::max(a.rows, b.rows), std::max(a.cols, b.cols), a.needs_grad || b.needs_grad);
   y.a = ai; y.b = bi;
   const T* av = a.v;
@@ -486,7 +489,7 @@ ATACOM_UNARY(clamp(Id x, T lo, T hi), Clamp, lo, hi)
 template <class T>
 typename Tape<T>::Id Tape<T>::reduce(Op op, Id xi, int axis) {
   const Node& x = node(xi);
-  check(axis >= -1 && axis <= 1, op == Op::Sum ? "sum" : "mean", "axis must be -1, 0 or 1");
+  check(axis >= -1 && axis <= 1, op == Op::Sum ? "sum" : "mean", [] { return "axis must be -1, 0 or 1"; });
   const int rows = axis == 1 ? x.rows : 1, cols = axis == 0 ? x.cols : 1;
   Node y = make(op, rows, cols, x.needs_grad);
   y.a = xi; y.i0 = axis;
@@ -530,7 +533,8 @@ template <class T>
 typename Tape<T>::Id Tape<T>::concat(Id ai, Id bi) {
   const Node& a = node(ai);
   const Node& b = node(bi);
-  check(a.rows == b.rows, "concat", "row counts differ: " + shape(a.rows, a.cols) + " vs " + shape(b.rows, b.cols));
+  check(a.rows == b.rows, "concat",
+        [&] { return "row counts differ: " + shape(a.rows, a.cols) + " vs " + shape(b.rows, b.cols); });
   Node y = make(Op::Concat, a.rows, a.cols + b.cols, a.needs_grad || b.needs_grad);
   y.a = ai; y.b = bi;
   for (int i = 0; i < y.rows; ++i) {
@@ -543,8 +547,9 @@ typename Tape<T>::Id Tape<T>::concat(Id ai, Id bi) {
 template <class T>
 typename Tape<T>::Id Tape<T>::slice(Id xi, int c0, int c1) {
   const Node& x = node(xi);
-  check(0 <= c0 && c0 < c1 && c1 <= x.cols, "slice",
-        "columns [" + std::to_string(c0) + ", " + std::to_string(c1) + ") outside " + shape(x.rows, x.cols));
+  check(0 <= c0 && c0 < c1 && c1 <= x.cols, "slice", [&] {
+    return "columns [" + std::to_string(c0) + ", " + std::to_string(c1) + ") outside " + shape(x.rows, x.cols);
+  });
   Node y = make(Op::Slice, x.rows, c1 - c0, x.needs_grad);
   y.a = xi; y.i0 = c0; y.i1 = c1;
   for (int i = 0; i < y.rows; ++i)
@@ -559,7 +564,7 @@ typename Tape<T>::Id Tape<T>::tanh_gauss_logp(Id mui, Id lsi, Id ui, T eps) {
   const Node& ls = node(lsi);
   const Node& u = node(ui);
   check(mu.rows == ls.rows && mu.rows == u.rows && mu.cols == ls.cols && mu.cols == u.cols, "tanh_gauss_logp",
-        "mu, log_std and u must share one shape");
+        [] { return "mu, log_std and u must share one shape"; });
   Node y = make(Op::TanhGaussLogp, mu.rows, 1, mu.needs_grad || ls.needs_grad || u.needs_grad);
   y.a = mui; y.b = lsi; y.c = ui; y.s0 = eps;
   const T half_log_2pi = T(0.91893853320467274178);
@@ -601,7 +606,7 @@ static void back_tanh_gauss_logp(const typename Tape<T>::Node& y, const typename
 template <class T>
 void Tape<T>::backward(Id loss) {
   const Node& l = node(loss);
-  check(l.rows == 1 && l.cols == 1, "backward", "loss must be (1 x 1), got " + shape(l.rows, l.cols));
+  check(l.rows == 1 && l.cols == 1, "backward", [&] { return "loss must be (1 x 1), got " + shape(l.rows, l.cols); });
   // A GradMode::Set leaf that some op other than a linear layer's weight or
   // bias consumes is cleared first and then added to like any other.
   for (const Node& n : nodes_) {
