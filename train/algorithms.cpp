@@ -13,6 +13,7 @@ const std::vector<ActionSourceEntry>& action_sources() {
       {"sac", A::Learner, "sac", true, "SAC (trains)"},
       {"sac-lag", A::Learner, "sac-lag", true, "SAC-Lagrangian against the episode-cost budget (trains)"},
       {"ppo", A::Learner, "ppo", true, "PPO (trains)"},
+      {"ppo-lag", A::Learner, "ppo-lag", true, "PPO-Lagrangian against the episode-cost budget (trains)"},
       {"la", A::Attractor, "", false, "the env's linear attractor (evaluated only)"},
       {"random", A::Random, "", false, "uniform random actions (evaluated only)"},
       {"zero", A::Zero, "", false, "zero actions (evaluated only)"},

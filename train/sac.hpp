@@ -17,7 +17,7 @@
 // Actions are in [-1, 1]^act_dim (the env contract). Observations reaching the
 // agent are already normalised by the trainer when obs_norm is on.
 //
-// With a cost critic (SAC-Lagrangian, train/sac_lag_learner.hpp): twin cost
+// With a cost critic (SAC-Lagrangian, train/lagrangian_learner.hpp): twin cost
 // critics Q_c as one more 2-member ensemble with its own Polyak target and
 // Adam moments (the reward critics' network shape, lr_critic and tau),
 //   y_c = c + gamma (1 - terminated) max_i Q'_c,i(s', a')   (the same a'; no entropy term),

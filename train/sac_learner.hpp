@@ -8,7 +8,7 @@
 // become progress.csv's alpha, actor_loss, critic_loss, alpha_loss, entropy
 // and q_mean columns. The adversary (train/adversary.hpp) is a SacLearner
 // that stores its own reward instead of the env's; SAC-Lag
-// (train/sac_lag_learner.hpp) one with a cost critic (two more columns,
+// (train/lagrangian_learner.hpp) one with a cost critic (two more columns,
 // cost_critic_loss and cost_q_mean) and the multiplier set before each step.
 #pragma once
 #include <memory>
