@@ -15,6 +15,7 @@
 //
 // Usage: bench_safety_layers [--quick] [--only random|table|nav]
 #include <cstdio>
+#include <initializer_list>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -80,7 +81,7 @@ void run(Case& c, bool quick) {
   const SafeLayerModel cbf = cbf_model(c.pm, kCbfDefaultGamma);
   for (int threads : {1, 2}) {
     set_num_threads(threads);
-    for (const SafeLayerModel* model : {&c.sm, &cbf}) {
+    for (const SafeLayerModel* model : std::initializer_list<const SafeLayerModel*>{&c.sm, &cbf}) {
       const double ts = bench::best_seconds_per_call([&] { safelayer_batch(*model, c.pb, out); }, quick ? 3 : 5, 0.1);
       long kept = 0, closed = 0, qp = 0, infeasible = 0, iters = 0;
       for (int e = 0; e < kN; ++e) {
