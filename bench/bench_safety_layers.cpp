@@ -9,10 +9,13 @@
 // steps through SafeLayer, with fresh alpha ~ U[-1, 1]. The projector runs
 // as the envs call it (no slack outputs). SafeLayer lines also give the
 // share of envs whose a_pi was kept, corrected in closed form, solved as a
-// QP, or infeasible, and the mean iteration count.
+// QP, or infeasible, and the mean iteration count. The "cbf" lines run the
+// same kernel on the CBF layer's model (src/safety/cbf_env.hpp, gamma 10:
+// SafeLayer's rows with dt = 1/gamma), with the same shares.
 //
 // Usage: bench_safety_layers [--quick] [--only random|table|nav]
 #include <cstdio>
+#include <initializer_list>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -24,6 +27,7 @@
 #include "atacom/rng.hpp"
 #include "atacom/safelayer.hpp"
 #include "bench_common.hpp"
+#include "src/safety/cbf_env.hpp"
 #include "src/safety/safe_layer_env.hpp"
 
 using namespace atacom;
@@ -74,21 +78,25 @@ void run(Case& c, bool quick) {
   SafeLayerBatch out(c.sm, kN);
   ProjectorBatch pb = c.pb;  // the projector writes its outputs into its own copy
   const char* gname = c.pm.g_form == GForm::Diagonal ? "diagonal" : "dense";
+  const SafeLayerModel cbf = cbf_model(c.pm, kCbfDefaultGamma);
   for (int threads : {1, 2}) {
     set_num_threads(threads);
-    const double ts = bench::best_seconds_per_call([&] { safelayer_batch(c.sm, c.pb, out); }, quick ? 3 : 5, 0.1);
-    long kept = 0, closed = 0, qp = 0, infeasible = 0, iters = 0;
-    for (int e = 0; e < kN; ++e) {
-      kept += out.iterations[e] == 0;
-      closed += out.iterations[e] == 1;
-      qp += out.iterations[e] > 1;
-      infeasible += (out.status[e] & kSafeLayerInfeasible) != 0;
-      iters += out.iterations[e];
+    for (const SafeLayerModel* model : std::initializer_list<const SafeLayerModel*>{&c.sm, &cbf}) {
+      const double ts = bench::best_seconds_per_call([&] { safelayer_batch(*model, c.pb, out); }, quick ? 3 : 5, 0.1);
+      long kept = 0, closed = 0, qp = 0, infeasible = 0, iters = 0;
+      for (int e = 0; e < kN; ++e) {
+        kept += out.iterations[e] == 0;
+        closed += out.iterations[e] == 1;
+        qp += out.iterations[e] > 1;
+        infeasible += (out.status[e] & kSafeLayerInfeasible) != 0;
+        iters += out.iterations[e];
+      }
+      bench::emit({{"bench", model == &cbf ? "cbf" : "safelayer"}, {"N", kN}, {"k", c.sm.k}, {"m", c.sm.m},
+                   {"n", c.sm.n}, {"threads", threads}, {"inputs", c.inputs}, {"G", gname}, {"per_s", kN / ts},
+                   {"kept_share", double(kept) / kN}, {"closed_form_share", double(closed) / kN},
+                   {"qp_share", double(qp) / kN}, {"infeasible_share", double(infeasible) / kN},
+                   {"mean_iterations", double(iters) / kN}});
     }
-    bench::emit({{"bench", "safelayer"}, {"N", kN}, {"k", c.sm.k}, {"m", c.sm.m}, {"n", c.sm.n}, {"threads", threads},
-                 {"inputs", c.inputs}, {"G", gname}, {"per_s", kN / ts}, {"kept_share", double(kept) / kN},
-                 {"closed_form_share", double(closed) / kN}, {"qp_share", double(qp) / kN},
-                 {"infeasible_share", double(infeasible) / kN}, {"mean_iterations", double(iters) / kN}});
     const double tp = bench::best_seconds_per_call([&] { project_batch(c.pm, pb, {.store_slack = false}); },
                                                    quick ? 3 : 5, 0.1);
     bench::emit({{"bench", "projector"}, {"N", kN}, {"k", c.pm.k}, {"m", c.pm.m}, {"n", c.pm.n}, {"threads", threads},

@@ -1,7 +1,8 @@
 // Golden hashes: every registered env, with and without ATACOM, stepped K
 // times by a fixed action sequence (no learning). The hash chains the batch
-// buffers after every step (obs, final_obs, reward, cost, terminated,
-// truncated, constraints, info, episode return and length), so it covers
+// buffers after every step (obs, final_obs, reward, continuous cost,
+// terminated, truncated, constraints, info, episode return and length; the
+// 0/1 cost is a function of the rows and info, tests/test_env_cost.cpp), so it covers
 // dynamics, constraint rows, reward, autoreset and the projector. It must be
 // the same for 1, 2 and 4 threads, and equal to a committed constant.
 //
@@ -114,7 +115,7 @@ uint64_t buffers_hash(uint64_t h, const EnvBuffers& b, int drop_info = -1) {
   h = mix(h, b.obs);
   h = mix(h, b.final_obs);
   h = mix(h, b.reward);
-  h = mix(h, b.cost);
+  h = mix(h, b.cost_continuous);  // the continuous cost's slot since before the 0/1 cost existed
   h = mix(h, b.terminated);
   h = mix(h, b.truncated);
   h = mix(h, b.constraints);

@@ -2,6 +2,7 @@
 #include "src/core/config_json.hpp"
 
 #include <stdexcept>
+#include <utility>
 
 namespace atacom {
 
@@ -10,7 +11,9 @@ const std::vector<ActionSourceEntry>& action_sources() {
   using A = ActionSource;
   static const std::vector<ActionSourceEntry> table = {
       {"sac", A::Learner, "sac", true, "SAC (trains)"},
+      {"sac-lag", A::Learner, "sac-lag", true, "SAC-Lagrangian against the episode-cost budget (trains)"},
       {"ppo", A::Learner, "ppo", true, "PPO (trains)"},
+      {"ppo-lag", A::Learner, "ppo-lag", true, "PPO-Lagrangian against the episode-cost budget (trains)"},
       {"la", A::Attractor, "", false, "the env's linear attractor (evaluated only)"},
       {"random", A::Random, "", false, "uniform random actions (evaluated only)"},
       {"zero", A::Zero, "", false, "zero actions (evaluated only)"},
@@ -46,6 +49,30 @@ const Algorithm& find_algorithm(const std::string& name) {
   std::string known;
   for (const Algorithm& a : algorithms()) known += (known.empty() ? "" : ", ") + a.name;
   throw std::invalid_argument("unknown algorithm '" + printable_text(name) + "' (known: " + known + ")");
+}
+
+std::string algorithm_color(const std::string& algo) {
+  // Okabe and Ito (2008): distinguishable with every common colour-vision deficiency.
+  static const std::pair<const char*, const char*> fixed[] = {
+      {"atacom-sac", "#0072B2"},     // blue: the paper's method
+      {"sac", "#D55E00"},            // vermillion
+      {"safelayer-sac", "#009E73"},  // bluish green
+      {"cbf-sac", "#CC79A7"},        // reddish purple
+      {"sac-lag", "#E69F00"},        // orange
+      {"la-atacom", "#56B4E9"},      // sky blue
+      {"la", "#000000"},             // black
+      {"atacom-ppo", "#332288"},     // Tol's muted set from here: indigo
+      {"ppo", "#882255"},            // wine
+      {"ppo-lag", "#999933"},        // olive
+      {"safelayer-ppo", "#117733"},  // green
+      {"cbf-ppo", "#AA4499"},        // purple
+  };
+  for (const auto& [name, color] : fixed)
+    if (algo == name) return color;
+  static const char* muted[] = {"#44AA99", "#88CCEE", "#DDCC77", "#CC6677", "#332288", "#882255", "#117733", "#999933"};
+  uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a of the name: the same colour in every report
+  for (unsigned char ch : algo) h = (h ^ ch) * 0x100000001b3ull;
+  return muted[h % (sizeof(muted) / sizeof(muted[0]))];
 }
 
 const Algorithm& algorithm_for(ActionSource source, const std::string& learner, SafetyLayer safety) {

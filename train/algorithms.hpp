@@ -56,6 +56,12 @@ const std::vector<Algorithm>& algorithms();
 std::vector<std::string> algorithm_names();
 // Throws std::invalid_argument for an unknown name, listing the known ones.
 const Algorithm& find_algorithm(const std::string& name);
+// The colour of an algorithm in every figure (report boxes, curves,
+// scatters, a run's progress.svg): fixed per name, colour-blind safe
+// (Okabe-Ito for the paper's and the safe-RL baselines' names, Paul Tol's
+// muted set for the others, chosen by a hash of the name).
+std::string algorithm_color(const std::string& algo);
+
 // The algorithm of a source (and learner) under a layer, e.g. the adversary
 // through ATACOM = "attack-atacom". Throws if there is none.
 const Algorithm& algorithm_for(ActionSource source, const std::string& learner, SafetyLayer safety);

@@ -41,6 +41,7 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
   std::vector<int> len(size_t(episodes), 0);
   std::vector<uint8_t> term(size_t(episodes), 0);
   std::vector<int32_t> viol(size_t(episodes), 0);
+  std::vector<double> cost(size_t(episodes), 0.0);
   std::vector<double> emax(size_t(episodes), -std::numeric_limits<double>::infinity());
   // Per env of the batch.
   std::vector<Rng> rngs(static_cast<size_t>(N));
@@ -79,6 +80,7 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
           if (std::isfinite(c)) emax[e] = std::max(emax[e], c);
         }
         viol[e] += v;
+        cost[e] += b.cost[size_t(i)];
         for (int c = 0; c < ni; ++c) {
           double& acc = info[e * ni + c];
           const double x = b.info[size_t(i) * ni + c];
@@ -108,6 +110,7 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
     steps += len[size_t(i)];
     r.early_terminations += term[size_t(i)];
     r.violations += double(viol[size_t(i)]) / M;
+    r.cost_mean += cost[size_t(i)] / M;
     for (int c = 0; c < ni; ++c) {
       double v = info[size_t(i) * ni + c];
       if (spec.info_reduce[size_t(c)] == InfoReduce::Mean) v /= std::max(1, len[size_t(i)]);
@@ -162,6 +165,7 @@ nlohmann::json eval_json(const EvalResult& r) {
                       {"early_terminations", r.early_terminations},
                       {"avg_episode_steps", r.avg_episode_steps},
                       {"violations", r.violations},
+                      {"eval_cost_mean", jnum(r.cost_mean)},
                       {"eval_max_constraint", jnum(r.max_constraint)},
                       {"eval_episode_max_constraint", jnum(r.episode_max_constraint)}};
   for (size_t c = 0; c < r.info_names.size() && c < r.info.size(); ++c) {

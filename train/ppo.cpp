@@ -184,7 +184,22 @@ void ppo_actor_act(Mlp<float>& actor, const float* log_std, double log_std_min, 
 }
 
 // ---------------------------------------------------------------- agent
-Ppo::Ppo(int obs_dim, int act_dim, const PpoConfig& cfg, uint64_t seed)
+struct Ppo::CostCritic {
+  Mlp<float> critic;
+  Adam<float> opt;
+  Tape<float> tape;
+  AlignedVector<float> ret, v;  // (max minibatch) cost returns and old cost values
+  CostCritic(int obs_dim, const PpoConfig& c) : critic(obs_dim, 1, c.critic, 1), opt(critic.params().size(), c.adam) {}
+};
+
+Ppo::~Ppo() = default;
+
+const Mlp<float>& Ppo::cost_critic() const {
+  if (!cost_) throw std::logic_error("Ppo::cost_critic: this agent has no cost critic");
+  return cost_->critic;
+}
+
+Ppo::Ppo(int obs_dim, int act_dim, const PpoConfig& cfg, uint64_t seed, bool cost_critic)
     : cfg_(cfg),
       obs_dim_(obs_dim),
       act_dim_(act_dim),
@@ -208,13 +223,19 @@ Ppo::Ppo(int obs_dim, int act_dim, const PpoConfig& cfg, uint64_t seed)
   for (size_t k = weights; k < bias; ++k) p[k] *= float(cfg.init_output_scale);
   if (cfg.log_std == LogStdMode::StateDependent)
     for (int j = 0; j < act_dim; ++j) p[bias + size_t(act_dim + j)] = float(cfg.init_log_std);
+  if (cost_critic) {  // drawn after the others: the actor and critic are plain PPO's
+    cost_ = std::make_unique<CostCritic>(obs_dim, cfg);
+    cost_->critic.init(init);
+  }
 }
 
-void Ppo::values(const float* obs, int64_t rows, float* out) {
+void Ppo::values(const float* obs, int64_t rows, float* out) { values_of(critic_, obs, rows, out); }
+
+void Ppo::values_of(Mlp<float>& net, const float* obs, int64_t rows, float* out) {
   for (int64_t r0 = 0; r0 < rows; r0 += kValueChunk) {
     const int n = int(std::min<int64_t>(kValueChunk, rows - r0));
     value_tape_.clear();
-    const auto v = critic_.forward(value_tape_, value_tape_.constant(obs + r0 * obs_dim_, n, obs_dim_), false);
+    const auto v = net.forward(value_tape_, value_tape_.constant(obs + r0 * obs_dim_, n, obs_dim_), false);
     std::copy_n(value_tape_.value(v).data, n, out + r0);
   }
 }
@@ -230,8 +251,18 @@ void Ppo::gather(const PpoRollout& r, const int32_t* idx, int B) {
       mb_adv_[size_t(i)] = r.advantage[k];
       mb_ret_[size_t(i)] = r.ret[k];
       mb_v_[size_t(i)] = r.value[k];
+      if (cost_) cost_->ret[size_t(i)] = r.cost_ret[k], cost_->v[size_t(i)] = r.cost_value[k];
     }
   });
+}
+
+double Ppo::cost_loss(int B) {
+  Tape<float>& t = cost_->tape;
+  t.clear();
+  const auto loss = record_ppo_value_loss<float>(t, cost_->critic, cfg_, mb_obs_.data(), cost_->ret.data(),
+                                                 cost_->v.data(), B);
+  t.backward(loss);
+  return t.scalar(loss);
 }
 
 template <class T>
@@ -334,10 +365,18 @@ void Ppo::step(double lr_actor, double lr_critic) {
   actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), lr_actor, nullptr, 0.0, kKeepGrads);
   if (indep) log_std_opt_.step(log_std_.data(), log_std_grad_.data(), lr_actor);
   critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), lr_critic, nullptr, 0.0, kKeepGrads);
+  if (cost_) {
+    auto& g = cost_->critic.grads();
+    if (cfg_.max_grad_norm > 0) clip_grad_norm(g.data(), g.size(), cfg_.max_grad_norm);
+    cost_->opt.step_fused(cost_->critic.params().data(), g.data(), lr_critic, nullptr, 0.0, kKeepGrads);
+  }
 }
 
-PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic) {
+PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic, double cost_weight) {
   if (r.steps != r.T) throw std::logic_error("Ppo::update on an unfinished rollout");
+  if (cost_ && !r.with_cost) throw std::logic_error("Ppo::update: a cost critic needs a rollout with costs");
+  if (cost_ && !(std::isfinite(cost_weight) && cost_weight >= 0))
+    throw std::invalid_argument("Ppo::update: the cost weight must be a finite number >= 0");
   const int N = r.N, T = r.T;
   const int64_t S = int64_t(T) * N;
   values(r.obs.data(), S, r.value.data());
@@ -357,12 +396,27 @@ PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic) {
     }
     total.explained_variance = vr > 0 ? 1.0 - ve / vr : std::numeric_limits<double>::quiet_NaN();
   }
+  if (cost_) {  // cost GAE, then the actor's advantage (A_r - w A_c) / (1 + w)
+    values_of(cost_->critic, r.obs.data(), S, r.cost_value.data());
+    values_of(cost_->critic, r.final_obs.data(), r.finals, r.cost_final_value.data());
+    values_of(cost_->critic, r.last_obs.data(), N, r.cost_last_value.data());
+    compute_gae(T, N, r.cost.data(), r.cost_value.data(), r.cost_last_value.data(), r.terminated.data(),
+                r.truncated.data(), r.final_row.data(), r.cost_final_value.data(), cfg_.gamma, cfg_.gae_lambda,
+                r.cost_advantage.data(), r.cost_ret.data());
+    const double w = cost_weight, inv = 1.0 / (1.0 + w);
+    for (int64_t k = 0; k < S; ++k)
+      r.advantage[size_t(k)] = float((double(r.advantage[size_t(k)]) - w * double(r.cost_advantage[size_t(k)])) * inv);
+  }
   const int K = int(ppo_minibatches(S, cfg_.minibatch_size));
   const int max_b = int((S + K - 1) / K);
   if (mb_obs_.size() < size_t(max_b) * obs_dim_) {  // first update: sized once
     mb_obs_.assign(size_t(max_b) * obs_dim_, 0.0f);
     mb_u_.assign(size_t(max_b) * act_dim_, 0.0f);
     for (auto* v : {&mb_logp_, &mb_adv_, &mb_ret_, &mb_v_}) v->assign(size_t(max_b), 0.0f);
+  }
+  if (cost_ && cost_->ret.size() < size_t(max_b)) {
+    cost_->ret.assign(size_t(max_b), 0.0f);
+    cost_->v.assign(size_t(max_b), 0.0f);
   }
   if (perm_.size() != size_t(S)) perm_.resize(size_t(S));
   std::iota(perm_.begin(), perm_.end(), 0);
@@ -384,7 +438,9 @@ PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic) {
       }
       const PpoStats st = losses(mb_obs_.data(), mb_u_.data(), mb_logp_.data(), mb_adv_.data(), mb_ret_.data(),
                                  mb_v_.data(), B);
-      if (!std::isfinite(st.policy_loss) || !std::isfinite(st.value_loss) || !std::isfinite(st.approx_kl))
+      const double lc = cost_ ? cost_loss(B) : 0.0;
+      if (!std::isfinite(st.policy_loss) || !std::isfinite(st.value_loss) || !std::isfinite(st.approx_kl) ||
+          !std::isfinite(lc))
         throw std::runtime_error("PPO update produced a non-finite loss (lower ppo.lr_actor/lr_critic, "
                                  "or scale the rewards with ppo.reward_scale)");
       if (cfg_.target_kl && st.approx_kl > *cfg_.target_kl) {
@@ -396,6 +452,7 @@ PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic) {
       ++total.minibatch_steps;
       total.policy_loss += st.policy_loss;
       total.value_loss += st.value_loss;
+      total.cost_value_loss += lc;
       total.entropy += st.entropy;
       total.approx_kl += st.approx_kl;
       total.clip_fraction += st.clip_fraction;
@@ -403,9 +460,10 @@ PpoStats Ppo::update(PpoRollout& r, double lr_actor, double lr_critic) {
   }
   if (const int n = total.minibatch_steps) {
     total.policy_loss /= n, total.value_loss /= n, total.entropy /= n, total.approx_kl /= n, total.clip_fraction /= n;
+    total.cost_value_loss /= n;
   } else {
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    total.policy_loss = total.value_loss = total.entropy = total.clip_fraction = nan;
+    total.policy_loss = total.value_loss = total.entropy = total.clip_fraction = total.cost_value_loss = nan;
   }
   return total;
 }
@@ -426,6 +484,10 @@ void Ppo::save(std::ostream& out) const {
   log_std_opt_.save(out);
   critic_opt_.save(out);
   bin::write_rng(out, rng_);
+  if (cost_) {  // plain PPO's bytes end above
+    bin::write_vec(out, cost_->critic.params());
+    cost_->opt.save(out);
+  }
 }
 
 void Ppo::load(std::istream& in) {
@@ -442,6 +504,12 @@ void Ppo::load(std::istream& in) {
   log_std_opt_.load(in);
   critic_opt_.load(in);
   bin::read_rng(in, rng_, "ppo.rng");
+  if (cost_) {
+    bin::read_vec(in, cost_->critic.params(), "ppo.cost_critic", int64_t(cost_->critic.params().size()));
+    cost_->opt.load(in);
+    for (float x : cost_->critic.params())
+      if (!std::isfinite(x)) throw std::runtime_error("PPO snapshot holds a non-finite cost critic parameter");
+  }
   for (const auto* v : {&actor_.params(), &log_std_, &critic_.params()})
     for (float x : *v)
       if (!std::isfinite(x)) throw std::runtime_error("PPO snapshot holds a non-finite parameter");

@@ -21,9 +21,19 @@
 // -1, 1) (the env contract's box, which ATACOM reads as alpha unchanged);
 // the rollout stores u, and log pi is the Gaussian density of u (the clip is
 // part of the environment). The deterministic action is clip(mean).
+//
+// With a cost critic (PPO-Lagrangian, train/lagrangian_learner.hpp): a
+// second value network V_c (the critic's shape, its own Adam, lr_critic,
+// max_grad_norm) on the rollout's 0/1 step costs, cost GAE(lambda) with the
+// same gamma, lambda and episode cuts as the reward's, the clipped value
+// loss on the cost returns in every minibatch, and the actor's advantage
+//   A = (A_r - w A_c) / (1 + w)
+// with w the multiplier (update()'s cost_weight), before the per-minibatch
+// normalisation. Without one, nothing of it exists and the bits are plain PPO's.
 #pragma once
 #include <cstdint>
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -125,20 +135,23 @@ typename Tape<T>::Id record_ppo_value_loss(Tape<T>& t, Mlp<T>& critic, const Ppo
 struct PpoStats {
   double policy_loss = 0, value_loss = 0, entropy = 0, approx_kl = 0, clip_fraction = 0;
   double explained_variance = 0;
+  double cost_value_loss = 0;  // with a cost critic: its loss, averaged like value_loss
   int minibatch_steps = 0;  // gradient steps taken (epochs run x minibatches, fewer after a KL stop)
   int minibatches = 0;      // per epoch
 };
 
 class Ppo {
  public:
-  Ppo(int obs_dim, int act_dim, const PpoConfig& cfg, uint64_t seed);
+  Ppo(int obs_dim, int act_dim, const PpoConfig& cfg, uint64_t seed, bool cost_critic = false);
+  ~Ppo();
   Ppo(const Ppo&) = delete;
   Ppo& operator=(const Ppo&) = delete;
 
   // The update of a full rollout (steps == T) at the given learning rates.
   // Writes the rollout's value/advantage arrays. Throws std::runtime_error
-  // on a non-finite loss (before any step of that minibatch).
-  PpoStats update(PpoRollout& r, double lr_actor, double lr_critic);
+  // on a non-finite loss (before any step of that minibatch). cost_weight:
+  // the multiplier w >= 0 (a cost critic only; the rollout must hold costs).
+  PpoStats update(PpoRollout& r, double lr_actor, double lr_critic, double cost_weight = 0.0);
 
   // V(obs) for `rows` normalised observations, in fixed chunks.
   void values(const float* obs, int64_t rows, float* out);
@@ -155,6 +168,8 @@ class Ppo {
   const Mlp<float>& actor() const { return actor_; }
   Mlp<float>& critic() { return critic_; }
   const Mlp<float>& critic() const { return critic_; }
+  bool has_cost_critic() const { return cost_ != nullptr; }
+  const Mlp<float>& cost_critic() const;  // throws without one
   // (A) state-independent log-std parameter (unused when state-dependent)
   AlignedVector<float>& log_std() { return log_std_; }
   const AlignedVector<float>& log_std() const { return log_std_; }
@@ -174,6 +189,8 @@ class Ppo {
 
  private:
   void gather(const PpoRollout& r, const int32_t* idx, int B);
+  void values_of(Mlp<float>& net, const float* obs, int64_t rows, float* out);
+  double cost_loss(int B);  // records and back-propagates the cost critic's minibatch loss
   void step(double lr_actor, double lr_critic);
 
   PpoConfig cfg_;
@@ -186,6 +203,8 @@ class Ppo {
   std::vector<int32_t> perm_;  // (T*N) row order of the current epoch
   // One minibatch, gathered (B rows at most max minibatch):
   AlignedVector<float> mb_obs_, mb_u_, mb_logp_, mb_adv_, mb_ret_, mb_v_;
+  struct CostCritic;                  // the cost value network, its Adam, its tape and minibatch targets
+  std::unique_ptr<CostCritic> cost_;  // null without
 };
 
 }  // namespace atacom

@@ -107,13 +107,14 @@ void PpoPolicy::load(std::istream& in) {
 }
 
 // ---------------------------------------------------------------- learner
-PpoLearner::PpoLearner(const LearnerContext& ctx, const PpoConfig& c)
+PpoLearner::PpoLearner(const LearnerContext& ctx, const PpoConfig& c, bool cost_critic)
     : cfg_(c),
       N_(ctx.num_envs),
       D_(ctx.spec->obs_dim),
       A_(ctx.spec->act_dim),
-      agent_(D_, A_, c, ctx.seed),
-      policy_(agent_, norm_.map()) {
+      agent_(D_, A_, c, ctx.seed, cost_critic),
+      policy_(agent_, norm_.map()),
+      cost_(cost_critic) {
   const double rows = double(c.rollout_steps) * double(N_);
   limits::require_memory(rows * (2.0 * D_ + A_ + 10.0) * 4.0 + double(c.minibatch_size) * (D_ + A_ + 4.0) * 4.0,
                          "ppo.rollout_steps = " + std::to_string(c.rollout_steps) + " x train.num_envs = " +
@@ -125,7 +126,7 @@ PpoLearner::PpoLearner(const LearnerContext& ctx, const PpoConfig& c)
     norm_.merge(ctx.initial->obs.data(), N_);
     norm_base_ = norm_.count();
   }
-  roll_.resize(c.rollout_steps, N_, D_, A_);
+  roll_.resize(c.rollout_steps, N_, D_, A_, cost_critic);
 }
 
 double PpoLearner::learning_rate() const { return cfg_.lr_actor * ppo_lr_factor(cfg_, env_steps_); }
@@ -149,6 +150,7 @@ void PpoLearner::observe(const float* obs, const double* actions, const EnvBuffe
   for (size_t i = 0; i < N; ++i) {
     const size_t k = base + i;
     roll_.reward[k] = b.reward[i] * scale;
+    if (cost_) roll_.cost[k] = b.cost[i];
     roll_.terminated[k] = b.terminated[i] ? 1 : 0;
     roll_.truncated[k] = (b.truncated[i] && !b.terminated[i]) ? 1 : 0;
     roll_.final_row[k] = -1;
@@ -164,7 +166,7 @@ void PpoLearner::observe(const float* obs, const double* actions, const EnvBuffe
   if (roll_.steps < roll_.T) return;
   norm_.map().apply(b.obs.data(), roll_.last_obs.data(), N_);
   const double f = ppo_lr_factor(cfg_, env_steps_);
-  const PpoStats st = agent_.update(roll_, cfg_.lr_actor * f, cfg_.lr_critic * f);
+  const PpoStats st = agent_.update(roll_, cfg_.lr_actor * f, cfg_.lr_critic * f, cost_weight_);
   roll_.steps = 0;
   roll_.finals = 0;
   ++rollouts_;
@@ -175,17 +177,22 @@ void PpoLearner::observe(const float* obs, const double* actions, const EnvBuffe
                        st.explained_variance, epochs};
   for (int j = 0; j < 7; ++j)
     if (std::isfinite(v[j])) sums_[j] += v[j];  // a KL stop before any step leaves the losses NaN
+  if (cost_ && std::isfinite(st.cost_value_loss)) cost_sum_ += st.cost_value_loss;
 }
 
 std::vector<std::string> PpoLearner::progress_columns() const {
-  return {"policy_loss", "value_loss", "entropy", "approx_kl", "clip_fraction", "explained_variance",
-          "learning_rate", "epochs"};
+  std::vector<std::string> c = {"policy_loss", "value_loss", "entropy", "approx_kl", "clip_fraction",
+                                "explained_variance", "learning_rate", "epochs"};
+  if (cost_) c.push_back("cost_value_loss");
+  return c;
 }
 
 std::vector<double> PpoLearner::progress_values() {
   const double n = double(n_window_);
   auto mean = [&](int j) { return n_window_ ? sums_[j] / n : kNaN; };
   std::vector<double> v = {mean(0), mean(1), mean(2), mean(3), mean(4), mean(5), learning_rate(), mean(6)};
+  if (cost_) v.push_back(n_window_ ? cost_sum_ / n : kNaN);
+  cost_sum_ = 0;
   n_window_ = 0;
   std::fill(std::begin(sums_), std::end(sums_), 0.0);
   return v;
@@ -216,6 +223,7 @@ void PpoLearner::save(std::ostream& out) const {
   agent_.save(out);
   norm_.save(out);
   roll_.save(out);
+  if (cost_) bin::write_pod(out, cost_sum_);
 }
 
 void PpoLearner::load(std::istream& in, int64_t env_steps) {
@@ -246,6 +254,8 @@ void PpoLearner::load(std::istream& in, int64_t env_steps) {
     bad("the normalisation statistics hold " + std::to_string(norm_.count()) + " observations after " +
         std::to_string(env_steps) + " env steps");
   roll_.load(in);
+  const double cost_sum = cost_ ? bin::read_pod<double>(in, "ppo.cost_loss_sum") : 0.0;
+  if (!std::isfinite(cost_sum)) bad("non-finite cost loss sum");
   if (roll_.steps != batch_steps % T)
     bad("the rollout holds " + std::to_string(roll_.steps) + " steps, the run is at step " +
         std::to_string(batch_steps % T) + " of its rollout");
@@ -254,6 +264,7 @@ void PpoLearner::load(std::istream& in, int64_t env_steps) {
   rollouts_ = rollouts;
   n_window_ = window;
   std::copy(std::begin(sums), std::end(sums), std::begin(sums_));
+  cost_sum_ = cost_sum;
 }
 
 uint64_t PpoLearner::state_hash() const {

@@ -62,7 +62,9 @@ class PpoPolicy final : public Policy {
 
 class PpoLearner final : public Learner {
  public:
-  PpoLearner(const LearnerContext& ctx, const PpoConfig& config);
+  // cost_critic: PPO-Lagrangian's (train/ppo.hpp): the rollout keeps the
+  // step costs, the agent a cost critic; progress.csv adds cost_value_loss.
+  PpoLearner(const LearnerContext& ctx, const PpoConfig& config, bool cost_critic = false);
   PpoLearner(const PpoLearner&) = delete;  // the policy points into this object
   PpoLearner& operator=(const PpoLearner&) = delete;
 
@@ -84,6 +86,8 @@ class PpoLearner final : public Learner {
   const RunningObsNorm& obs_norm() const { return norm_; }
   const PpoConfig& config() const { return cfg_; }
   double learning_rate() const;  // the actor's, at the current env step
+  // The multiplier weighing the cost advantage in the next update (a cost critic only).
+  void set_cost_weight(double w) { cost_weight_ = w; }
 
  private:
   PpoConfig cfg_;
@@ -99,6 +103,9 @@ class PpoLearner final : public Learner {
   // Loss window since the last progress row (checkpointed): rollouts and sums.
   int64_t n_window_ = 0;
   double sums_[7] = {};     // policy_loss, value_loss, entropy, approx_kl, clip_fraction, explained_variance, epochs
+  bool cost_ = false;       // a cost critic (checkpointed after the rest: plain PPO's bytes unchanged)
+  double cost_weight_ = 0;
+  double cost_sum_ = 0;     // cost_value_loss over the window
 };
 
 // Learner registry hooks (train/learner_registry.cpp). The defaults are

@@ -11,7 +11,7 @@
 
 namespace atacom {
 
-void PpoRollout::resize(int t, int n, int d, int a) {
+void PpoRollout::resize(int t, int n, int d, int a, bool costs) {
   T = t, N = n, D = d, A = a;
   steps = finals = 0;
   const size_t rows = size_t(T) * size_t(N);
@@ -29,6 +29,9 @@ void PpoRollout::resize(int t, int n, int d, int a) {
   last_value.assign(size_t(N), 0.0f);
   advantage.assign(rows, 0.0f);
   ret.assign(rows, 0.0f);
+  with_cost = costs;
+  for (auto* v : {&cost, &cost_value, &cost_final_value, &cost_advantage, &cost_ret}) v->assign(costs ? rows : 0, 0.0f);
+  cost_last_value.assign(costs ? size_t(N) : 0, 0.0f);
 }
 
 namespace {
@@ -66,6 +69,7 @@ void PpoRollout::save(std::ostream& out) const {
   write_rows(out, truncated.data(), r);
   write_rows(out, final_row.data(), r);
   write_rows(out, final_obs.data(), size_t(finals) * size_t(D));
+  if (with_cost) write_rows(out, cost.data(), r);
 }
 
 void PpoRollout::load(std::istream& in) {
@@ -88,6 +92,11 @@ void PpoRollout::load(std::istream& in) {
   read_rows(in, truncated.data(), r, "ppo_rollout.truncated");
   read_rows(in, final_row.data(), r, "ppo_rollout.final_row");
   read_rows(in, final_obs.data(), size_t(f) * size_t(D), "ppo_rollout.final_obs");
+  if (with_cost) {
+    read_rows(in, cost.data(), r, "ppo_rollout.cost");
+    for (size_t k = 0; k < r; ++k)
+      if (!(cost[k] >= 0.0f && cost[k] <= 1.0f)) throw std::runtime_error("PPO rollout holds a cost outside [0, 1]");
+  }
   // Every truncated row owns the next final slot, in row order.
   int32_t next = 0;
   for (size_t k = 0; k < r; ++k) {

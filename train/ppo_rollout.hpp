@@ -35,11 +35,17 @@ struct PpoRollout {
   AlignedVector<float> last_value; // (N) V(last_obs)
   AlignedVector<float> advantage;  // (T*N)
   AlignedVector<float> ret;        // (T*N) advantage + value: the value target
+  // With a cost critic (PPO-Lagrangian, train/lagrangian_learner.hpp): the
+  // step's 0/1 cost (EnvBuffers::cost) and the cost counterparts of the
+  // arrays above, GAE'd the same way. Empty without.
+  bool with_cost = false;
+  AlignedVector<float> cost, cost_value, cost_final_value, cost_last_value, cost_advantage, cost_ret;
 
-  void resize(int T, int N, int D, int A);
+  void resize(int T, int N, int D, int A, bool with_cost = false);
   int rows() const { return steps * N; }
   // The rows stored so far (steps, finals and their arrays), for checkpoints
-  // taken inside a rollout; load() validates every flag and index.
+  // taken inside a rollout (the costs after the rest, with a cost critic
+  // only); load() validates every flag and index.
   void save(std::ostream& out) const;
   void load(std::istream& in);
 };

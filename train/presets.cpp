@@ -25,8 +25,14 @@ nlohmann::json config_fragment(const nlohmann::json& entries, const std::string&
     nlohmann::json o = entries.at(key);
     o.erase("note");
     if (key.find('*') != std::string::npos) {
-      for (const LearnerEntry& le : learner_entries())
-        if (le.name != a.learner) o.erase(le.section);
+      // Learner sections reach the cells whose learner reads them (the SAC
+      // family's "sac" reaches sac-lag cells too).
+      const LearnerEntry* own = a.learns() ? &learner_entry(a.learner) : nullptr;
+      for (const LearnerEntry& le : learner_entries()) {
+        if (!(own && own->owns(le.section))) o.erase(le.section);
+        for (const LearnerSection& x : le.extra_sections)
+          if (!(own && own->owns(x.name))) o.erase(x.name);
+      }
       for (const SafetyLayerEntry& l : safety_layer_entries())
         if (l.name != a.safety.name()) o.erase(l.name);
     }

@@ -100,17 +100,22 @@ RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* trai
   if (!train_base && !eval_every_set) c.train.eval_every = default_eval_every(c.train.steps);
   validate(c.train);
   if (const auto* h = r.sub("host")) c.host = *h;  // a record of where a run was computed: kept, not read
-  // Learner sections: the algorithm's own learner's, and no other.
-  const nlohmann::json* section = nullptr;
-  for (const LearnerEntry& le : learner_entries()) {
-    const nlohmann::json* s = object_section(r.sub(le.section.c_str()), le.section);
-    if (!s && !from_preset(le.section)) continue;
-    if (le.name != algo.learner)
-      throw std::invalid_argument("config section '" + le.section + "'" + (s ? "" : " of preset '" + c.train.preset + "'") +
+  // Learner sections: the ones the algorithm's own learner reads, and no other.
+  const LearnerEntry* own = algo.learns() ? &learner_entry(algo.learner) : nullptr;
+  auto check_learner_section = [&](const std::string& name) -> const nlohmann::json* {
+    const nlohmann::json* s = object_section(r.sub(name.c_str()), name);
+    if ((s || from_preset(name)) && !(own && own->owns(name)))
+      throw std::invalid_argument("config section '" + name + "'" + (s ? "" : " of preset '" + c.train.preset + "'") +
                                   " does not apply to algo '" + algo.name + "' (" +
                                   (algo.learns() ? "it trains the '" + algo.learner + "' learner"
                                                  : std::string("it has no learner")) + ")");
-    section = s;
+    return s;
+  };
+  const nlohmann::json* section = nullptr;
+  for (const LearnerEntry& le : learner_entries()) {
+    const nlohmann::json* s = check_learner_section(le.section);
+    if (own && le.section == own->section) section = s;
+    for (const LearnerSection& x : le.extra_sections) check_learner_section(x.name);
   }
   // Safety-layer sections: the algorithm's own layer's, and no other.
   nlohmann::json layer_overrides = nullptr;
@@ -135,6 +140,13 @@ RunConfig resolve_run_config(const nlohmann::json& file, const TrainConfig* trai
       if (over)
         for (auto it = over->begin(); it != over->end(); ++it) merged[it.key()] = it.value();
     c.learner = le.resolve(merged);
+    for (const LearnerSection& x : le.extra_sections) {
+      nlohmann::json m = x.default_config();
+      for (const nlohmann::json* over : {from_preset(x.name), r.sub(x.name.c_str())})
+        if (over)
+          for (auto it = over->begin(); it != over->end(); ++it) m[it.key()] = it.value();
+      c.learner_sections[x.name] = x.resolve(m);
+    }
   }
   nlohmann::json env_overrides = nlohmann::json::object();
   if (const auto* p = from_preset("env")) merge_into(env_overrides, *p);
@@ -148,6 +160,7 @@ nlohmann::json run_config_json(const RunConfig& c) {
   nlohmann::json j = {{"env", c.env}, {"train", c.train}};
   const Algorithm& algo = find_algorithm(c.train.algo);
   if (algo.learns()) j[learner_entry(algo.learner).section] = c.learner;
+  for (auto it = c.learner_sections.begin(); it != c.learner_sections.end(); ++it) j[it.key()] = it.value();
   if (c.safety.is_object() && !c.safety.empty()) j[algo.safety.name()] = c.safety;
   if (!c.host.is_null()) j["host"] = c.host;
   return j;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,10 +21,10 @@ std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector
                                    "train_episode_return"};
   cols.insert(cols.end(), learner_columns.begin(), learner_columns.end());
   cols.insert(cols.end(), spec.info_names.begin(), spec.info_names.end());
-  for (const char* c : {"early_terminations", "avg_episode_steps", "violations", "eval_discounted_return_mean",
-                        "eval_discounted_return_std", "eval_max_constraint", "eval_episode_max_constraint",
-                        "train_episodes", "train_terminations",
-                        "train_violations"})
+  for (const char* c : {"early_terminations", "avg_episode_steps", "violations", "eval_cost_mean",
+                        "eval_discounted_return_mean", "eval_discounted_return_std", "eval_max_constraint",
+                        "eval_episode_max_constraint", "train_episodes", "train_terminations", "train_violations",
+                        "train_cost"})
     cols.push_back(c);
   for (size_t c = 0; c < spec.info_names.size() && c < spec.info_reduce.size(); ++c)
     if (spec.info_reduce[c] == InfoReduce::Sum) cols.push_back("train_" + spec.info_names[c]);
@@ -96,20 +97,39 @@ void ProgressFile::restore(int64_t rows) {
   if (!f) throw std::runtime_error("'" + path_ + "' is missing; the checkpoint expects " + std::to_string(rows) +
                                    " evaluation rows in it");
   std::string line;
-  if (!std::getline(f, line) || line != header_)
+  if (!std::getline(f, line))
     throw std::runtime_error("'" + path_ + "' does not start with this run's header (" + header_.substr(0, 60) + "...)");
+  // The file's columns: col_of[k] = this run's column of file column k (a
+  // header of an earlier build may lack columns added since).
+  const bool same_header = line == header_;
+  std::vector<int> col_of;
+  if (same_header) {
+    for (size_t c = 0; c < columns_.size(); ++c) col_of.push_back(int(c));
+  } else {
+    std::istringstream hs(line);
+    for (std::string name; std::getline(hs, name, ',');) {
+      const int c = column(name);
+      if (c < 0 || std::find(col_of.begin(), col_of.end(), c) != col_of.end())
+        throw std::runtime_error("'" + path_ + "' does not start with this run's header (" + header_.substr(0, 60) +
+                                 "...): its column '" + name + "' is not one of this run's");
+      col_of.push_back(c);
+    }
+  }
   lines_.clear();
   values_.clear();
   while (int64_t(lines_.size()) < rows && std::getline(f, line)) {
-    std::vector<double> v;
+    std::vector<double> cells;
+    std::vector<std::string> texts;
     std::istringstream ls(line);
     std::string cell;
     // getline drops an empty last cell: the line's cells are its commas + 1.
-    const size_t cells = size_t(std::count(line.begin(), line.end(), ',')) + 1;
-    while (v.size() < cells) {
+    const size_t n = size_t(std::count(line.begin(), line.end(), ',')) + 1;
+    while (cells.size() < n) {
       if (!std::getline(ls, cell, ',')) cell.clear();
-      if (cell.empty() && v.size() < blank_nan_.size() && blank_nan_[v.size()]) {
-        v.push_back(NAN);
+      const size_t k = cells.size();
+      texts.push_back(cell);
+      if (cell.empty() && k < col_of.size() && blank_nan_[size_t(col_of[k])]) {
+        cells.push_back(NAN);
         continue;
       }
       char* end = nullptr;
@@ -117,13 +137,31 @@ void ProgressFile::restore(int64_t rows) {
       if (cell.empty() || end != cell.c_str() + cell.size())
         throw std::runtime_error("'" + path_ + "' row " + std::to_string(lines_.size() + 1) + " holds '" + cell +
                                  "', not a number");
-      v.push_back(x);
+      cells.push_back(x);
     }
-    if (v.size() != columns_.size())
+    if (cells.size() != col_of.size())
       throw std::runtime_error("'" + path_ + "' row " + std::to_string(lines_.size() + 1) + " has " +
-                               std::to_string(v.size()) + " values for " + std::to_string(columns_.size()) +
+                               std::to_string(cells.size()) + " values for " + std::to_string(col_of.size()) +
                                " columns");
-    lines_.push_back(line);
+    if (same_header) {
+      lines_.push_back(line);
+      values_.push_back(cells);
+      continue;
+    }
+    // Columns the file lacks: NaN ("nan", or an empty cell where NaN is written so).
+    std::vector<double> v(columns_.size(), std::numeric_limits<double>::quiet_NaN());
+    std::vector<const std::string*> text(columns_.size(), nullptr);
+    for (size_t k = 0; k < col_of.size(); ++k) {
+      v[size_t(col_of[k])] = cells[k];
+      text[size_t(col_of[k])] = &texts[k];
+    }
+    std::string out;
+    for (size_t c = 0; c < columns_.size(); ++c) {
+      if (c) out += ',';
+      if (text[c]) out += *text[c];
+      else if (!blank_nan_[c]) out += "nan";
+    }
+    lines_.push_back(out);
     values_.push_back(v);
   }
   if (int64_t(lines_.size()) < rows)

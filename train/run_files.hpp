@@ -26,6 +26,9 @@ class ProgressFile {
   // A resumed run: reads the file, checks its header against the columns
   // and keeps its first `rows` rows (rows written after the checkpoint are
   // produced again). Throws std::runtime_error naming what does not fit.
+  // Reads the first `rows` rows back (a resume). A file written by an earlier
+  // build whose header lacks columns added since (every one of its columns
+  // still among this run's) is taken over with NaN in the new columns.
   void restore(int64_t rows);
   void append(const std::vector<double>& row);  // one value per column
 

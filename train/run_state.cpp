@@ -15,6 +15,7 @@ constexpr uint32_t kTagLearner = 0x4c524e52;   // "LRNR"
 constexpr uint32_t kTagStreams = 0x5354524d;   // "STRM"
 constexpr uint32_t kTagEnv = 0x454e5653;       // "ENVS"
 constexpr uint32_t kTagEpisodeSteps = 0x45505354;  // "EPST"
+constexpr uint32_t kTagTrainCost = 0x54534f43;     // "COST"
 constexpr uint64_t kActStream = uint64_t{1} << 32;  // action noise: stream kActStream + env id
 
 // Evaluations a run must have written by env_steps: one per batch step that
@@ -86,6 +87,7 @@ void init_run_state(RunState& s, const TrainConfig& t, const EnvSpec& spec, cons
   s.train_info_sums.assign(spec.info_names.size(), 0.0);
   s.best = nullptr;
   s.train_episode_steps = 0;
+  s.train_cost = 0;
   s.act_rngs.resize(size_t(t.num_envs));
   for (int i = 0; i < t.num_envs; ++i) s.act_rngs[size_t(i)].reseed(uint64_t(t.seed), kActStream + uint64_t(i));
   s.obs = initial.obs;
@@ -108,6 +110,8 @@ std::string save_run_payload(const RunState& s, const Learner& learner, const Ba
   env.save_state(p);
   bin::write_tag(p, kTagEpisodeSteps);
   bin::write_pod(p, s.train_episode_steps);
+  bin::write_tag(p, kTagTrainCost);
+  bin::write_pod(p, s.train_cost);
   return p.str();
 }
 
@@ -143,6 +147,14 @@ void load_run_payload(const std::string& payload, const TrainConfig& t, const En
     if (v != -1 && (v < lo || v > hi))
       throw std::runtime_error("checkpoint counter train_episode_steps = " + std::to_string(v) + " is outside [" +
                                std::to_string(lo) + ", " + std::to_string(hi) + "] (train_episodes, env_steps)");
+  }
+  r.train_cost = -1;  // and checkpoints of builds before the cost signal here
+  if (p.peek() != std::char_traits<char>::eof()) {
+    bin::expect_tag(p, kTagTrainCost, "training cost");
+    r.train_cost = bin::read_pod<int64_t>(p, "training cost");
+    if (r.train_cost != -1 && (r.train_cost < 0 || r.train_cost > r.counters.env_steps))
+      throw std::runtime_error("checkpoint counter train_cost = " + std::to_string(r.train_cost) + " is outside [0, " +
+                               std::to_string(r.counters.env_steps) + "] (env_steps)");
   }
   if (p.peek() != std::char_traits<char>::eof()) throw std::runtime_error("checkpoint payload is longer than its sections");
   s = std::move(r);

@@ -4,7 +4,9 @@
 //   the first evaluation that met the quality target) | info sums | best evaluation (JSON text) |
 //   "LRNR" learner payload | "STRM" action streams, observations | "ENVS" env batch |
 //   "EPST" steps of the finished training episodes (i64; absent in checkpoints
-//   of earlier builds, which load with it unknown)
+//   of earlier builds, which load with it unknown) |
+//   "COST" the training cost so far (i64; absent in checkpoints of earlier
+//   builds, which load with it unknown)
 // Loading validates every counter against the config (train/run_state.cpp),
 // so a checkpoint with a valid checksum but impossible numbers is refused
 // with the name of the first bad one instead of spinning or erasing files.
@@ -60,6 +62,9 @@ struct RunState {
   // over train_episodes, the paper's "average episode steps over training".
   // -1: unknown (a run resumed from a checkpoint written before it was kept).
   int64_t train_episode_steps = 0;
+  // Steps of training with cost 1 (EnvBuffers::cost summed): summary.json's
+  // and progress.csv's train_cost. -1: unknown (resumed from an older checkpoint).
+  int64_t train_cost = 0;
 };
 
 // Fresh state of a run: counters at step 0, streams keyed by the seed.

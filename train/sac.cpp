@@ -80,7 +80,13 @@ constexpr auto kSetGrads = Tape<float>::GradMode::Set;
 constexpr auto kKeepGrads = Adam<float>::Grads::Keep;
 }  // namespace
 
-Sac::Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed)
+Sac::CostCritic::CostCritic(int in, const SacConfig& cfg)
+    : critic(in, 1, cfg.critic, 2),
+      target(in, 1, cfg.critic, 2),
+      opt(critic.params().size(), cfg.adam),
+      y(size_t(cfg.batch_size), 0.0f) {}
+
+Sac::Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed, bool cost_critic)
     : cfg_(cfg),
       obs_dim_(obs_dim),
       act_dim_(act_dim),
@@ -97,6 +103,11 @@ Sac::Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed)
   actor_.init(init);
   critic_.init(init);
   critic_target_.params() = critic_.params();
+  if (cost_critic) {  // drawn after the others: the actor and critics are plain SAC's
+    cost_ = std::make_unique<CostCritic>(obs_dim + act_dim, cfg);
+    cost_->critic.init(init);
+    cost_->target.params() = cost_->critic.params();
+  }
   const size_t B = size_t(cfg.batch_size);
   noise_pi_.assign(B * act_dim, 0.0f);
   noise_next_.assign(B * act_dim, 0.0f);
@@ -127,6 +138,18 @@ void Sac::step_critic() {
   if (cfg_.grad_clip > 0) clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.grad_clip);
   critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), cfg_.lr_critic,
                          critic_target_.params().data(), cfg_.tau, kKeepGrads);
+  if (cost_) {
+    Mlp<float>& qc = cost_->critic;
+    if (cfg_.grad_clip > 0) clip_grad_norm(qc.grads().data(), qc.grads().size(), cfg_.grad_clip);
+    cost_->opt.step_fused(qc.params().data(), qc.grads().data(), cfg_.lr_critic, cost_->target.params().data(),
+                          cfg_.tau, kKeepGrads);
+  }
+}
+
+const Mlp<float>& Sac::cost_critic() const {
+  if (!cost_) throw std::logic_error("Sac::cost_critic: this agent has no cost critic");
+  finish_steps();
+  return cost_->critic;
 }
 
 double Sac::alpha() const { return std::exp(log_alpha_); }
@@ -168,7 +191,7 @@ void Sac::act(const float* obs, int N, bool deterministic, Rng* rngs, double* ac
   sac_actor_act(actor_, act_tape_, cfg_.log_std_min, cfg_.log_std_max, obs, N, deterministic, rngs, actions);
 }
 
-SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
+SacStats Sac::update(const ReplayBatch& batch, bool update_actor, double cost_weight) {
   const int B = cfg_.batch_size, A = act_dim_, D = obs_dim_;
   if (batch.B != B) throw std::invalid_argument("Sac::update: batch has " + std::to_string(batch.B) +
                                                 " rows, config batch_size is " + std::to_string(B));
@@ -181,6 +204,9 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
   for (auto& z : noise_next_) z = float(rng_.normal());
   finish_steps();
   const float alpha = float(std::exp(log_alpha_));
+  const float lambda = float(cost_weight);
+  if (cost_ && !(std::isfinite(cost_weight) && cost_weight >= 0))
+    throw std::invalid_argument("Sac::update: the cost weight must be a finite number >= 0");
   double mean_logp = 0;
 
   // Set by the critic phase once it has read the actor (its next-state policy).
@@ -194,9 +220,18 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     t.clear();
     const auto obs = t.constant(batch.obs.data(), B, D);
     const PolicyOut pi = policy(t, obs, noise_pi_.data(), true);
-    const auto q = critic_.forward(t, t.concat(obs, pi.action), false);
+    const auto sa = t.concat(obs, pi.action);
+    const auto q = critic_.forward(t, sa, false);
     const auto qmin = t.minimum(t.slice(q, 0, 1), t.slice(q, 1, 2));
-    const auto loss = t.mean(t.sub(t.affine(pi.logp, alpha, 0.0f), qmin));
+    auto per_row = t.sub(t.affine(pi.logp, alpha, 0.0f), qmin);
+    if (cost_) {  // + lambda max_i Q_c,i, all over (1 + lambda); max(x, y) = -min(-x, -y)
+      const auto qc = cost_->critic.forward(t, sa, false);
+      const auto qc_max = t.affine(t.minimum(t.affine(t.slice(qc, 0, 1), -1.0f, 0.0f),
+                                             t.affine(t.slice(qc, 1, 2), -1.0f, 0.0f)),
+                                   -1.0f, 0.0f);
+      per_row = t.affine(t.add(per_row, t.affine(qc_max, lambda, 0.0f)), 1.0f / (1.0f + lambda), 0.0f);
+    }
+    const auto loss = t.mean(per_row);
     t.backward(loss);  // writes the actor grads (GradMode::Set): nothing clears them
     const float* lp = t.value(pi.logp).data;
     for (int i = 0; i < B; ++i) mean_logp += lp[i];
@@ -212,7 +247,8 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
     const auto next = t.constant(batch.next_obs.data(), B, D);
     const PolicyOut pn = policy(t, next, noise_next_.data(), false);
     actor_read.store(true, std::memory_order_release);  // no actor parameter is read after this
-    const auto qt = critic_target_.forward(t, t.concat(next, pn.action), false);
+    const auto sn = t.concat(next, pn.action);
+    const auto qt = critic_target_.forward(t, sn, false);
     const float* qtv = t.value(qt).data;
     const float* lpn = t.value(pn.logp).data;
     const float gamma = float(cfg_.gamma);
@@ -221,11 +257,30 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
       // Termination cuts the bootstrap; truncation does not.
       y_[size_t(i)] = batch.reward[size_t(i)] + gamma * (1.0f - batch.terminated[size_t(i)]) * v;
     }
+    if (cost_) {  // the cost target at the same a': the largest twin, no entropy term
+      const float* qct = t.value(cost_->target.forward(t, sn, false)).data;
+      for (int i = 0; i < B; ++i)
+        cost_->y[size_t(i)] = batch.cost[size_t(i)] +
+                              gamma * (1.0f - batch.terminated[size_t(i)]) * std::max(qct[2 * i], qct[2 * i + 1]);
+    }
     const auto obs = t.constant(batch.obs.data(), B, D);
-    const auto q = critic_.forward(t, t.concat(obs, t.constant(batch.action.data(), B, A)), true, kSetGrads);
+    const auto sa = t.concat(obs, t.constant(batch.action.data(), B, A));
+    const auto q = critic_.forward(t, sa, true, kSetGrads);
     const auto err = t.sub(q, t.constant(y_.data(), B, 1));
     const auto loss = t.sum(t.mean(t.square(err), 0));
-    t.backward(loss);  // writes the critic grads (GradMode::Set)
+    if (cost_) {
+      // One backward over both losses: each critic's grads come from its own (the parameters are disjoint).
+      const auto qc = cost_->critic.forward(t, sa, true, kSetGrads);
+      const auto loss_c = t.sum(t.mean(t.square(t.sub(qc, t.constant(cost_->y.data(), B, 1))), 0));
+      t.backward(t.add(loss, loss_c));
+      st.cost_critic_loss = 0.5 * t.scalar(loss_c);
+      double qcm = 0;
+      const float* qcv = t.value(qc).data;
+      for (int i = 0; i < 2 * B; ++i) qcm += qcv[i];
+      st.cost_q_mean = qcm / (2 * B);
+    } else {
+      t.backward(loss);  // writes the critic grads (GradMode::Set)
+    }
     st.critic_loss = 0.5 * t.scalar(loss);  // mean over the two critics
     double qm = 0;
     const float* qv = t.value(q).data;
@@ -253,7 +308,7 @@ SacStats Sac::update(const ReplayBatch& batch, bool update_actor) {
 
   // A non-finite loss throws: the run stops with its last checkpoint on
   // disk. The actor may have been stepped by then; the critic and alpha not.
-  if (!std::isfinite(st.critic_loss))
+  if (!std::isfinite(st.critic_loss) || !std::isfinite(st.cost_critic_loss))
     throw std::runtime_error("SAC critic update produced a non-finite loss (lower lr_critic or check the rewards)");
   if (update_actor) {
     if (!std::isfinite(st.actor_loss) || !std::isfinite(mean_logp))
@@ -292,6 +347,11 @@ void Sac::save(std::ostream& out) const {
   alpha_opt_.save(out);
   bin::write_pod<double>(out, log_alpha_);
   bin::write_rng(out, rng_);
+  if (cost_) {  // plain SAC's bytes end above
+    bin::write_vec(out, cost_->critic.params());
+    bin::write_vec(out, cost_->target.params());
+    cost_->opt.save(out);
+  }
 }
 
 void Sac::load(std::istream& in) {
@@ -310,6 +370,11 @@ void Sac::load(std::istream& in) {
   alpha_opt_.load(in);
   log_alpha_ = bin::read_pod<double>(in, "sac.log_alpha");
   bin::read_rng(in, rng_, "sac.rng");
+  if (cost_) {
+    bin::read_vec(in, cost_->critic.params(), "sac.cost_critic", int64_t(cost_->critic.params().size()));
+    bin::read_vec(in, cost_->target.params(), "sac.cost_critic_target", int64_t(cost_->target.params().size()));
+    cost_->opt.load(in);
+  }
 }
 
 uint64_t Sac::state_hash() const {

@@ -16,9 +16,21 @@
 // steps the actor and alpha first and draws a' from the stepped actor.
 // Actions are in [-1, 1]^act_dim (the env contract). Observations reaching the
 // agent are already normalised by the trainer when obs_norm is on.
+//
+// With a cost critic (SAC-Lagrangian, train/lagrangian_learner.hpp): twin cost
+// critics Q_c as one more 2-member ensemble with its own Polyak target and
+// Adam moments (the reward critics' network shape, lr_critic and tau),
+//   y_c = c + gamma (1 - terminated) max_i Q'_c,i(s', a')   (the same a'; no entropy term),
+//   L_Qc = sum_i mean((Q_c,i(s, a) - y_c)^2),
+// the pessimistic (largest) cost estimate, and the actor's loss weighs it
+// with the multiplier lambda (update()'s cost_weight), normalised so that
+// its scale does not grow with lambda:
+//   L_pi = mean(alpha log pi - min_i Q_i + lambda max_i Q_c,i) / (1 + lambda).
+// Without one, nothing of it exists and the bits are plain SAC's.
 #pragma once
 #include <cstdint>
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -72,12 +84,13 @@ void sac_actor_act(Mlp<float>& actor, Tape<float>& tape, double log_std_min, dou
 
 struct SacStats {
   double actor_loss = 0, critic_loss = 0, alpha_loss = 0, entropy = 0, q_mean = 0;
+  double cost_critic_loss = 0, cost_q_mean = 0;  // with a cost critic
   bool actor_updated = false;
 };
 
 class Sac {
  public:
-  Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed);
+  Sac(int obs_dim, int act_dim, const SacConfig& cfg, uint64_t seed, bool cost_critic = false);
   ~Sac() noexcept;
   Sac(const Sac&) = delete;
   Sac& operator=(const Sac&) = delete;
@@ -94,7 +107,9 @@ class Sac {
   // the caller's env step overlaps it; every member below that reads the
   // critics, their targets or their moments waits for it first, so callers
   // observe the stepped agent, bit for bit.
-  SacStats update(const ReplayBatch& batch, bool update_actor);
+  // cost_weight: the multiplier lambda >= 0 of the cost critic's term in the
+  // actor loss (ignored without a cost critic).
+  SacStats update(const ReplayBatch& batch, bool update_actor, double cost_weight = 0.0);
 
   double alpha() const;
   double log_alpha() const { return log_alpha_; }
@@ -110,9 +125,11 @@ class Sac {
   const Mlp<float>& actor() const { return actor_; }
   const Mlp<float>& critic() const { finish_steps(); return critic_; }
   const Mlp<float>& critic_target() const { finish_steps(); return critic_target_; }
+  bool has_cost_critic() const { return cost_ != nullptr; }
+  const Mlp<float>& cost_critic() const;  // throws without one
 
   // FNV-1a hash over every learned value (networks, targets, Adam moments,
-  // temperature, RNG): equal hashes mean bitwise equal agents.
+  // temperature, RNG, the cost critic): equal hashes mean bitwise equal agents.
   uint64_t state_hash() const;
   // Everything the agent learned or drew, for checkpoints.
   void save(std::ostream& out) const;
@@ -142,8 +159,16 @@ class Sac {
   std::vector<float> noise_pi_;    // (B x act_dim) reparameterisation noise for the actor loss
   std::vector<float> noise_next_;  // (B x act_dim) noise for a' ~ pi(s')
   std::vector<float> y_;           // (B) critic targets
+  // The cost critics (null without): written by the critic phase (grads) and step_critic.
+  struct CostCritic {
+    Mlp<float> critic, target;
+    Adam<float> opt;
+    std::vector<float> y;  // (B) targets
+    CostCritic(int in, const SacConfig& cfg);
+  };
+  std::unique_ptr<CostCritic> cost_;
   // The deferred step_critic of the last update, if any. It writes only the
-  // critics, their targets and critic_opt_.
+  // critics, their targets and critic_opt_ (and the cost critics').
   mutable tbb::task_group steps_;
   // Whether steps_ holds a task: wait() on an empty group still resets its
   // context, and the critic accessors call finish_steps() often.

@@ -69,12 +69,12 @@ void SacPolicy::load(std::istream& in) {
 }
 
 // ---------------------------------------------------------------- learner
-SacLearner::SacLearner(const LearnerContext& ctx, const SacConfig& c)
+SacLearner::SacLearner(const LearnerContext& ctx, const SacConfig& c, bool cost_critic)
     : cfg_(c),
       N_(ctx.num_envs),
       D_(ctx.spec->obs_dim),
       A_(ctx.spec->act_dim),
-      sac_(D_, A_, c, ctx.seed),
+      sac_(D_, A_, c, ctx.seed, cost_critic),
       policy_(sac_.actor(), norm_, c.log_std_min, c.log_std_max),
       replay_(c.replay_capacity, D_, A_) {
   if (c.replay_capacity < c.batch_size) throw std::invalid_argument("config: sac.replay_capacity must be >= sac.batch_size");
@@ -99,11 +99,13 @@ void SacLearner::observe_rewarded(const float* obs, const double* actions, const
     budget_ -= 1.0;
     if (replay_.size() <= cfg_.initial_replay || replay_.size() < cfg_.batch_size) continue;
     replay_.sample(replay_rng_, batch_);
-    const SacStats st = sac_.update(batch_, replay_.size() > cfg_.warmup);
+    const SacStats st = sac_.update(batch_, replay_.size() > cfg_.warmup, cost_weight_);
     ++updates_;
     ++n_critic_;
     critic_loss_ += st.critic_loss;
     q_mean_ += st.q_mean;
+    cost_critic_loss_ += st.cost_critic_loss;
+    cost_q_mean_ += st.cost_q_mean;
     if (st.actor_updated) {
       ++n_actor_;
       actor_loss_ += st.actor_loss;
@@ -114,7 +116,9 @@ void SacLearner::observe_rewarded(const float* obs, const double* actions, const
 }
 
 std::vector<std::string> SacLearner::progress_columns() const {
-  return {"alpha", "actor_loss", "critic_loss", "alpha_loss", "entropy", "q_mean"};
+  std::vector<std::string> c = {"alpha", "actor_loss", "critic_loss", "alpha_loss", "entropy", "q_mean"};
+  if (sac_.has_cost_critic()) c.insert(c.end(), {"cost_critic_loss", "cost_q_mean"});
+  return c;
 }
 
 std::vector<double> SacLearner::progress_values() {
@@ -124,8 +128,12 @@ std::vector<double> SacLearner::progress_values() {
                            n_actor_ ? alpha_loss_ / double(n_actor_) : kNaN,
                            n_actor_ ? entropy_ / double(n_actor_) : kNaN,
                            n_critic_ ? q_mean_ / double(n_critic_) : kNaN};
+  if (sac_.has_cost_critic())
+    v.insert(v.end(), {n_critic_ ? cost_critic_loss_ / double(n_critic_) : kNaN,
+                       n_critic_ ? cost_q_mean_ / double(n_critic_) : kNaN});
   n_critic_ = n_actor_ = 0;
   critic_loss_ = actor_loss_ = alpha_loss_ = entropy_ = q_mean_ = 0;
+  cost_critic_loss_ = cost_q_mean_ = 0;
   return v;
 }
 
@@ -142,6 +150,8 @@ void SacLearner::save(std::ostream& out) const {
   bin::write_pod(out, n_critic_);
   bin::write_pod(out, n_actor_);
   for (double x : {critic_loss_, actor_loss_, alpha_loss_, entropy_, q_mean_}) bin::write_pod(out, x);
+  if (sac_.has_cost_critic())  // plain SAC's layout has no such sums
+    for (double x : {cost_critic_loss_, cost_q_mean_}) bin::write_pod(out, x);
   sac_.save(out);
   replay_.save(out);
   bin::write_rng(out, replay_rng_);
@@ -153,8 +163,8 @@ void SacLearner::load(std::istream& in, int64_t env_steps) {
   const auto updates = bin::read_pod<int64_t>(in, "sac.updates");
   const auto n_critic = bin::read_pod<int64_t>(in, "sac.n_critic");
   const auto n_actor = bin::read_pod<int64_t>(in, "sac.n_actor");
-  double sums[5];
-  for (double& x : sums) x = bin::read_pod<double>(in, "sac.loss_sums");
+  double sums[7] = {0, 0, 0, 0, 0, 0, 0};
+  for (int i = 0; i < (sac_.has_cost_critic() ? 7 : 5); ++i) sums[i] = bin::read_pod<double>(in, "sac.loss_sums");
   auto bad = [](const std::string& what) { throw std::runtime_error("SAC learner state: " + what); };
   if (!(budget >= 0.0 && budget < 1.0)) bad("update budget " + std::to_string(budget) + " not in [0, 1)");
   // Every transition adds updates_per_step to the budget; each update spends 1.
@@ -181,6 +191,8 @@ void SacLearner::load(std::istream& in, int64_t env_steps) {
   alpha_loss_ = sums[2];
   entropy_ = sums[3];
   q_mean_ = sums[4];
+  cost_critic_loss_ = sums[5];
+  cost_q_mean_ = sums[6];
 }
 
 // ---------------------------------------------------------------- registry hooks

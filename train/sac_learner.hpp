@@ -7,7 +7,9 @@
 // update budget (updates_per_step per transition) and the loss windows that
 // become progress.csv's alpha, actor_loss, critic_loss, alpha_loss, entropy
 // and q_mean columns. The adversary (train/adversary.hpp) is a SacLearner
-// that stores its own reward instead of the env's.
+// that stores its own reward instead of the env's; SAC-Lag
+// (train/lagrangian_learner.hpp) one with a cost critic (two more columns,
+// cost_critic_loss and cost_q_mean) and the multiplier set before each step.
 #pragma once
 #include <memory>
 #include <vector>
@@ -46,7 +48,7 @@ class SacPolicy final : public Policy {
 
 class SacLearner : public Learner {
  public:
-  SacLearner(const LearnerContext& ctx, const SacConfig& config);
+  SacLearner(const LearnerContext& ctx, const SacConfig& config, bool cost_critic = false);
   SacLearner(const SacLearner&) = delete;  // the policy points into this object
   SacLearner& operator=(const SacLearner&) = delete;
 
@@ -65,6 +67,9 @@ class SacLearner : public Learner {
   uint64_t state_hash() const override { return sac_.state_hash(); }  // networks, moments, temperature, RNG
 
   const Sac& agent() const { return sac_; }
+  int64_t replay_size() const { return replay_.size(); }
+  // The multiplier of the cost critic's term in the actor loss (cost critic only).
+  void set_cost_weight(double w) { cost_weight_ = w; }
   const SacConfig& config() const { return cfg_; }
 
  private:
@@ -82,6 +87,8 @@ class SacLearner : public Learner {
   double budget_ = 0;
   int64_t updates_ = 0, n_critic_ = 0, n_actor_ = 0;
   double critic_loss_ = 0, actor_loss_ = 0, alpha_loss_ = 0, entropy_ = 0, q_mean_ = 0;
+  double cost_critic_loss_ = 0, cost_q_mean_ = 0;  // with a cost critic (checkpointed after the others)
+  double cost_weight_ = 0;  // set by the owner before each observe (not state)
 };
 
 // Learner registry hooks (train/learner_registry.cpp).

@@ -125,7 +125,7 @@ Run::Run(const RunConfig& cfg, const TrainOptions& opts) : cfg_(cfg), opts_(opts
       N_ = t.num_envs;
       env_ = make_env(EnvRequest{t.env, N_, algo_->safety, cfg_.env, cfg_.safety});
       env_->seed(uint64_t(t.seed));
-      LearnerContext ctx{&env_->spec(), N_, uint64_t(t.seed), &env_->buffers()};
+      LearnerContext ctx{&env_->spec(), N_, uint64_t(t.seed), &env_->buffers(), &cfg_.learner_sections};
       learner_ = learner_entry(algo_->learner).make(ctx, cfg_.learner);
       policy_ = &learner_->policy();
       learner_cols = learner_->progress_columns();
@@ -177,6 +177,7 @@ void Run::step() {
       if (spec_.info_reduce[size_t(col)] == InfoReduce::Sum)
         st_.train_info_sums[size_t(col)] += b.info[size_t(i) * ninfo_ + col];
     c.train_violations += violated(b, i);
+    if (st_.train_cost >= 0) st_.train_cost += b.cost[size_t(i)] != 0.0f;
     for (int r = 0; r < k; ++r) {
       const double v = b.constraints[size_t(i) * k + r];
       if (std::isfinite(v)) c.train_max_constraint = std::max(c.train_max_constraint, v);
@@ -221,9 +222,10 @@ void Run::record(const EvalResult& ev) {
     row.insert(row.end(), lv.begin(), lv.end());
   }
   row.insert(row.end(), ev.info.begin(), ev.info.end());
-  for (double v : {double(ev.early_terminations), ev.avg_episode_steps, ev.violations, ev.discounted_return_mean,
-                   ev.discounted_return_std, ev.max_constraint, ev.episode_max_constraint, double(c.train_episodes),
-                   double(c.train_terminations), double(c.train_violations)})
+  for (double v : {double(ev.early_terminations), ev.avg_episode_steps, ev.violations, ev.cost_mean,
+                   ev.discounted_return_mean, ev.discounted_return_std, ev.max_constraint, ev.episode_max_constraint,
+                   double(c.train_episodes), double(c.train_terminations), double(c.train_violations),
+                   st_.train_cost >= 0 ? double(st_.train_cost) : kNaN})
     row.push_back(v);
   for (int col = 0; col < ninfo_; ++col)
     if (spec_.info_reduce[size_t(col)] == InfoReduce::Sum) row.push_back(st_.train_info_sums[size_t(col)]);
@@ -399,6 +401,8 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
   s["train_episodes"] = c.train_episodes;
   s["train_terminations"] = c.train_terminations;
   s["train_violations"] = c.train_violations;
+  // Algorithms that do not learn take no training step: 0, like the other train_* counters.
+  s["train_cost"] = st_.train_cost >= 0 ? nlohmann::json(st_.train_cost) : nlohmann::json(nullptr);
   // The paper's "average episode steps over training"; an algorithm that
   // does not learn runs only its evaluation episodes, so theirs stands in.
   if (!learner_) s["train_avg_episode_steps"] = jnum(ev.avg_episode_steps);

@@ -235,7 +235,8 @@ void step_group(const ArmModel& m, ArmBatch& b, EnvBuffers& B, const double* act
     for (size_t row = 0; row < kk; ++row) cmax = std::max(cmax, b.c[e * kk + row]);
     std::memcpy(&B.constraints[e * kk], &b.c[e * kk], sizeof(double) * kk);
     B.reward[e] = static_cast<float>(r);
-    B.cost[e] = static_cast<float>(std::max(0.0, cmax));
+    B.cost_continuous[e] = static_cast<float>(std::max(0.0, cmax));
+    B.cost[e] = step_cost(&b.c[e * kk], m.spec.constraint_tolerance.data(), m.k, collision || o.joint_violation[l]);
     B.terminated[e] = term;
     B.truncated[e] = trunc;
     float* info = &B.info[e * ni];
@@ -341,7 +342,7 @@ void arm_reset_range(const ArmModel& m, ArmBatch& b, EnvBuffers& B, const uint8_
     std::memcpy(&B.final_obs[se * d], &B.obs[se * d], sizeof(float) * d);
     std::memcpy(&B.constraints[se * kk], &b.c[se * kk], sizeof(double) * kk);
     B.reward[se] = 0.0f;
-    B.cost[se] = 0.0f;
+    B.cost[se] = B.cost_continuous[se] = 0.0f;
     B.terminated[se] = B.truncated[se] = 0;
     for (size_t c = 0; c < ni; ++c) B.info[se * ni + c] = 0.0f;
   }

@@ -297,6 +297,7 @@ void ArmModel::build_spec() {
       s.constraint_tolerance.push_back(config.hri.upright.tolerance[0]);
     }
   }
+  s.cost_events = {"collision", "joint_limit_violation"};  // HRI's human contact is a collision too
   s.info_names = {"collision", "joint_limit_violation", "final_distance", "distance",
                   "angle",     "in_region",             "nan_action",     "reset_fallback"};
   s.info_reduce = {InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Last, InfoReduce::Mean,

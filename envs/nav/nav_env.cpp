@@ -118,6 +118,7 @@ NavEnv::NavEnv(const NavConfig& config, int num_envs) : cfg_(config) {
                       "at_goal",       "fetch_distance", "fetch_goals",     "nan_action"};
   spec_.info_reduce = {InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Last, InfoReduce::Mean,
                        InfoReduce::Last, InfoReduce::Last, InfoReduce::Sum,  InfoReduce::Sum};
+  spec_.cost_events = {"collision"};  // wall or Fetch contact
   spec_.target = cfg_.target;
   check_env_target(spec_);
 
@@ -329,7 +330,8 @@ void NavEnv::reset(const uint8_t* mask) {
       nav_constraints(task_geom_, &st_.tiago[3 * i], xf, c, jq, jx);
       double worst = 0.0;
       for (size_t r = 0; r < k; ++r) { buffers_.constraints[k * i + r] = c[r]; worst = std::max(worst, c[r]); }
-      buffers_.cost[i] = static_cast<float>(worst);
+      buffers_.cost_continuous[i] = static_cast<float>(worst);
+      buffers_.cost[i] = 0.0f;  // no step happened
     }
   });
 }
@@ -458,7 +460,8 @@ void NavEnv::step_block(const double* actions, int lo, int hi, int block_index) 
     nav_constraints(task_geom_, tp, xf, c, jq, jx);
     double worst = 0.0;
     for (size_t j = 0; j < k; ++j) { buffers_.constraints[k * i + j] = c[j]; worst = std::max(worst, c[j]); }
-    buffers_.cost[i] = static_cast<float>(worst);
+    buffers_.cost_continuous[i] = static_cast<float>(worst);
+    buffers_.cost[i] = step_cost(c, spec_.constraint_tolerance.data(), int(k), collided);
 
     float* info = &buffers_.info[ni * i];
     std::fill_n(info, ni, 0.0f);

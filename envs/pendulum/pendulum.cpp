@@ -131,7 +131,7 @@ void PendulumEnv::step(const double* actions) {
       ret_[s] += reward;
       t_[s] += 1;
       b.reward[s] = float(reward);
-      b.cost[s] = 0.0f;
+      b.cost[s] = b.cost_continuous[s] = 0.0f;
       b.terminated[s] = 0;
       b.truncated[s] = t_[s] >= p.horizon ? 1 : 0;
       b.info[s * ninfo + kInfoAbsTheta] = float(std::abs(angle_normalize(theta_[s])));

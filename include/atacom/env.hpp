@@ -58,6 +58,9 @@ struct EnvSpec {
   int num_constraints = 0;                    // k: columns of EnvBuffers::constraints
   std::vector<double> constraint_tolerance;   // (k) a row violates when c > tolerance
   std::vector<std::string> constraint_names;  // (k)
+  // Info columns whose non-zero value is a safety event (a collision, a
+  // joint-limit violation): the step's cost is 1 then (EnvBuffers::cost).
+  std::vector<std::string> cost_events;
   std::vector<std::string> info_names;        // columns of EnvBuffers::info
   std::vector<InfoReduce> info_reduce;        // (info_names.size()) per-episode aggregation
   EnvTarget target;                           // quality target (undefined: none)
@@ -68,7 +71,9 @@ struct EnvBuffers {
   std::vector<float> obs;             // (N x obs_dim) observation to act on next
   std::vector<float> final_obs;       // (N x obs_dim) observation the last step reached (== obs unless done)
   std::vector<float> reward;          // (N) reward of the last step
-  std::vector<float> cost;            // (N) constraint cost of the last step (max(0, max_i c_i))
+  // The two costs of the last step (docs/training.md, "Cost"):
+  std::vector<float> cost;            // (N) 0 or 1: 1 when a row exceeds its tolerance or a cost event happened (step_cost)
+  std::vector<float> cost_continuous; // (N) max(0, max_i c_i) at the state the step reached
   std::vector<uint8_t> terminated;    // (N) episode ended in a terminal state (no bootstrap)
   std::vector<uint8_t> truncated;     // (N) episode hit the horizon (bootstrap from final_obs)
   std::vector<double> constraints;    // (N x k) constraint values at the state the step reached
@@ -83,6 +88,16 @@ struct EnvBuffers {
   void copy_values_from(const EnvBuffers& from);
   bool done(int i) const { return terminated[i] || truncated[i]; }
 };
+
+// Safety-Gymnasium's per-step cost: 1 when one of the k rows `c` exceeds its
+// tolerance (c_r > tol_r, as EnvSpec::constraint_tolerance) or `event` (a
+// collision or joint-limit event of the step), else 0. A NaN row does not
+// count (as for the violation counters).
+inline float step_cost(const double* c, const double* tol, int k, bool event) {
+  bool v = event;
+  for (int r = 0; r < k && !v; ++r) v = c[r] > tol[r];
+  return v ? 1.0f : 0.0f;
+}
 
 class BatchEnv {
  public:

@@ -28,6 +28,7 @@ struct EvalResult {
   int early_terminations = 0;     // episodes that ended terminated (collision, limit), not by the horizon
   double avg_episode_steps = 0;
   double violations = 0;          // steps per episode with a constraint row above its tolerance
+  double cost_mean = 0;           // per episode the summed step cost (EnvBuffers::cost, 0 or 1), averaged
   double max_constraint = 0;      // largest constraint value of any row at any step (NaN: no rows)
   double episode_max_constraint = 0;  // per episode the largest value of any row, averaged (NaN: no rows)
   double final_distance = 0;      // the env's "final_distance" info column (NaN: the env has none)
@@ -52,7 +53,7 @@ bool meets_target(const EnvTarget& target, const EvalResult& r);
 nlohmann::json target_json(const EnvTarget& target);
 
 // {"eval_return_mean", "eval_return_std", "eval_discounted_return_mean", ...,
-//  "early_terminations", "avg_episode_steps", "violations", "eval_max_constraint",
+//  "early_terminations", "avg_episode_steps", "violations", "eval_cost_mean", "eval_max_constraint",
 //  "eval_episode_max_constraint",
 //  one key per info column, collision columns also as "<name>s"}; non-finite
 // numbers as null. The keys summary.json uses for the final and the best evaluation.

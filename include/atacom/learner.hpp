@@ -1,6 +1,6 @@
 // The learner contract: what the trainer loop knows of a learning algorithm.
 //
-// A learner (SAC, the adversary) owns its config section of config.json,
+// A learner (SAC, the adversary, SAC-Lag) owns its config sections of config.json,
 // its progress.csv columns, its checkpoint payload, its state hash and its
 // summary.json keys. It exposes the Policy that acts during training (with
 // sampled actions) and evaluation, and receives every batch transition
@@ -28,6 +28,9 @@ struct LearnerContext {
   int num_envs = 1;                     // N of the training batch
   uint64_t seed = 0;                    // the run's seed
   const EnvBuffers* initial = nullptr;  // the training batch right after env.seed(seed)
+  // The learner's further sections (LearnerEntry::extra_sections), resolved,
+  // by name: {"lagrangian": {...}}. Null or empty for learners without any.
+  const nlohmann::json* sections = nullptr;
 };
 
 class Learner {
@@ -63,9 +66,17 @@ class Learner {
   virtual uint64_t state_hash() const = 0;
 };
 
+// A config section that more than one learner reads (the Lagrangian
+// learners' "lagrangian"): its one default factory and strict resolver.
+struct LearnerSection {
+  std::string name;  // "lagrangian"
+  nlohmann::json (*default_config)();
+  nlohmann::json (*resolve)(const nlohmann::json& section);
+};
+
 struct LearnerEntry {
-  std::string name;     // "sac", "adversary"
-  std::string section;  // the config.json section it owns ("sac", "adversary")
+  std::string name;     // "sac", "adversary", "sac-lag"
+  std::string section;  // the config.json section of its settings ("sac", "adversary"; sac-lag reads "sac" too)
   std::string help;
   // The one default factory's values (JSON). Per env x algorithm settings
   // are presets (train/presets.hpp), laid over these by resolve_run_config.
@@ -77,6 +88,16 @@ struct LearnerEntry {
   // The learner's acting policy for an env, with unset parameters (policy
   // files load into it).
   std::unique_ptr<Policy> (*make_policy)(const EnvSpec& spec, const nlohmann::json& resolved);
+  // Sections it reads besides `section` (sac-lag: "lagrangian"); make() finds
+  // them resolved in LearnerContext::sections.
+  std::vector<LearnerSection> extra_sections = {};
+  // Whether the learner reads config section `name`.
+  bool owns(const std::string& name) const {
+    if (name == section) return true;
+    for (const LearnerSection& e : extra_sections)
+      if (e.name == name) return true;
+    return false;
+  }
 };
 
 const std::vector<LearnerEntry>& learner_entries();

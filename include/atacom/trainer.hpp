@@ -66,6 +66,7 @@ struct RunConfig {
   TrainConfig train;
   nlohmann::json env;      // the env's resolved config (defaults + overrides)
   nlohmann::json learner;  // the learner's resolved section (null: the algorithm does not learn)
+  nlohmann::json learner_sections = nlohmann::json::object();  // its further sections, resolved ({"lagrangian": ...})
   nlohmann::json safety;   // the safety layer's resolved parameters (an object; empty for layers without any)
   nlohmann::json host;     // where the run was computed: recorded, never read (null until a run writes it)
 };
@@ -154,14 +155,16 @@ inline std::unique_ptr<TrainedPolicy> load_run_policy(const std::string& run_dir
 // Column names of progress.csv for an env (spec of the env the run acts in)
 // and a learner's columns: env_steps, updates, wall_s, eval_return_mean,
 // eval_return_std, train_episode_return, <learner columns>, <info columns>,
-// early_terminations, avg_episode_steps, violations,
+// early_terminations, avg_episode_steps, violations, eval_cost_mean,
 // eval_discounted_return_mean, eval_discounted_return_std,
 // eval_max_constraint, eval_episode_max_constraint, train_episodes,
-// train_terminations, train_violations,
+// train_terminations, train_violations, train_cost,
 // train_<info> for every summed info column, time_to_target_s,
 // steps_to_target, updates_to_target, train_cost_to_target (the first
 // evaluation that met the quality target, at or before this row; empty
-// cells until one has).
+// cells until one has). eval_cost_mean: the evaluation episodes' summed step
+// cost (EnvBuffers::cost), averaged; train_cost: the step cost summed over
+// every training step so far.
 std::vector<std::string> progress_columns(const EnvSpec& spec, const std::vector<std::string>& learner_columns);
 
 // Hand-written SVG line chart of eval return (mean +- std band) vs env steps.

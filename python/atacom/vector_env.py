@@ -82,7 +82,9 @@ class AtacomVectorEnv(_VectorEnvBase):
     """N envs of one registered kind (see atacom.env_names()) behind a safety layer.
 
     Arrays: observations float32 (N, obs_dim), rewards float32 (N,),
-    terminated / truncated bool (N,), info["cost"] float32 (N,),
+    terminated / truncated bool (N,), info["cost"] float32 (N,) (0 or 1: a row
+    above its tolerance or a collision / joint-limit event, Safety-Gymnasium's
+    convention), info["cost_continuous"] float32 (N,) (max(0, max_i c_i)),
     info["constraints"] float64 (N, k) with info["constraint_names"] (k names),
     every per-step info column of the env by name, float32 (N,), and under
     ATACOM info["atacom_status"] uint32 (N,) (projector status bits; bit 2 =
@@ -139,6 +141,7 @@ class AtacomVectorEnv(_VectorEnvBase):
         self.constraint_tolerance = _readonly(np.array(spec["constraint_tolerance"], dtype=np.float64))
         self.info_names = tuple(spec["info_names"])
         self.info_reduce = dict(zip(spec["info_names"], spec["info_reduce"]))
+        self.cost_events = tuple(spec["cost_events"])  # info columns that make a step's cost 1
         self.metadata = {"autoreset_mode": self._mode, "render_modes": []}
         self.render_mode = None
         self.spec = None
@@ -157,6 +160,7 @@ class AtacomVectorEnv(_VectorEnvBase):
         e = self._env
         self._obs, self._final_obs = e.view_obs(), e.view_final_obs()
         self._reward, self._cost = e.view_reward(), e.view_cost()
+        self._cost_continuous = e.view_cost_continuous()
         self._terminated, self._truncated = e.view_terminated(), e.view_truncated()
         self._constraints, self._info = e.view_constraints(), e.view_info()
         self._episode_return, self._episode_length = e.view_episode_return(), e.view_episode_length()
@@ -254,6 +258,8 @@ class AtacomVectorEnv(_VectorEnvBase):
         info = {}
         info["cost"] = self._cost.copy() if c else self._cost
         info["_cost"] = step_mask
+        info["cost_continuous"] = self._cost_continuous.copy() if c else self._cost_continuous
+        info["_cost_continuous"] = step_mask
         info["constraints"] = self._constraints.copy() if c else self._constraints
         info["_constraints"] = self._all_true
         info["constraint_names"] = self.constraint_names
@@ -283,7 +289,10 @@ class AtacomVectorEnv(_VectorEnvBase):
                 (self._truncated.copy() if c else self._truncated), info)
 
     def step_with_cost(self, actions):
-        """Safety-Gymnasium's convention: (obs, reward, cost, terminated, truncated, info)."""
+        """Safety-Gymnasium's convention: (obs, reward, cost, terminated, truncated, info).
+
+        cost is info["cost"], 0 or 1 per env; the continuous one is info["cost_continuous"].
+        """
         obs, reward, terminated, truncated, info = self.step(actions)
         return obs, reward, info["cost"], terminated, truncated, info
 
@@ -364,6 +373,7 @@ class AtacomVectorEnv(_VectorEnvBase):
             fin["_" + name] = done
 
         put("cost", self._cost)
+        put("cost_continuous", self._cost_continuous)
         put("constraints", self._constraints)
         for name, col in zip(self.info_names, self._info_cols):
             put(name, col)

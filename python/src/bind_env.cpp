@@ -68,7 +68,7 @@ class PyEnv {
     for (int i = 0; i < N(); ++i) {
       if (mask && !mask[i]) continue;
       b.reward[i] = 0.0f;
-      b.cost[i] = 0.0f;
+      b.cost[i] = b.cost_continuous[i] = 0.0f;
       b.terminated[i] = b.truncated[i] = 0;
       std::fill_n(b.info.data() + size_t(i) * ni, ni, 0.0f);
     }
@@ -79,7 +79,7 @@ class PyEnv {
     std::vector<const void*> s = {b.obs.data(),         b.final_obs.data(),      b.reward.data(),
                                   b.cost.data(),        b.terminated.data(),     b.truncated.data(),
                                   b.constraints.data(), b.info.data(),           b.episode_return.data(),
-                                  b.episode_length.data()};
+                                  b.episode_length.data(), b.cost_continuous.data()};
     if (safe_) s.push_back(safe_->projection().status.data());
     return s;
   }
@@ -126,6 +126,7 @@ void bind_env(py::module_& m) {
              d["constraint_tolerance"] = s.constraint_tolerance;
              d["constraint_names"] = s.constraint_names;
              d["info_names"] = s.info_names;
+             d["cost_events"] = s.cost_events;
              std::vector<std::string> reduce;
              for (InfoReduce r : s.info_reduce) reduce.push_back(reduce_name(r));
              d["info_reduce"] = reduce;
@@ -225,6 +226,11 @@ void bind_env(py::module_& m) {
            [](py::object self) {
              PyEnv& e = self.cast<PyEnv&>();
              return view_of(self, {e.N()}, e.env().buffers().cost.data());
+           })
+      .def("view_cost_continuous",
+           [](py::object self) {
+             PyEnv& e = self.cast<PyEnv&>();
+             return view_of(self, {e.N()}, e.env().buffers().cost_continuous.data());
            })
       // 0/1 bytes viewed as NumPy bool (same size, and the envs only write 0 or 1).
       .def("view_terminated",

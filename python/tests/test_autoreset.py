@@ -78,7 +78,8 @@ def test_pendulum_transitions_follow_gymnasium_semantics(mode):
                 final = np.array([fo[i] if done[i] else obs2[i] for i in range(N)])
                 fin = info["final_info"]
                 np.testing.assert_array_equal(info["_final_info"], done)
-                for key in ("abs_theta", "nonfinite_action", "cost", "episode_length", "episode_return"):
+                for key in ("abs_theta", "nonfinite_action", "cost", "cost_continuous", "episode_length",
+                            "episode_return"):
                     np.testing.assert_array_equal(fin["_" + key], done)
                     check_masked(fin[key], done)
                 np.testing.assert_array_equal(fin["episode_length"][done], H)
@@ -172,7 +173,7 @@ def test_table_terminations_same_step_and_next_step_agree_until_the_reset():
             np.testing.assert_array_equal(i_s["final_obs"][i], o_n[i])
             assert not np.array_equal(o_s[i], o_n[i])  # ... and obs is already the next episode's
         fin = i_s["final_info"]
-        for key in ("collision", "joint_limit_violation", "cost"):
+        for key in ("collision", "joint_limit_violation", "cost", "cost_continuous"):
             check_masked(fin[key], done, i_s[key])
         check_masked(fin["constraints"], done, i_s["constraints"])
         assert np.all(fin["episode_length"][done] >= 1)

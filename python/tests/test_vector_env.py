@@ -55,9 +55,18 @@ def test_step_shapes_dtypes_and_info_columns(env):
     for name in env.info_names:
         assert info[name].shape == (N,) and info[name].dtype == np.float32, name
         assert info["_" + name].shape == (N,) and info["_" + name].all(), name
-    # cost is max(0, max_i c_i) of the constraints the step reached
+    assert info["cost_continuous"].shape == (N,) and info["cost_continuous"].dtype == np.float32
+    # cost_continuous is max(0, max_i c_i) of the constraints the step reached; cost is 1 exactly
+    # when a row exceeds its tolerance or a cost event (collision, joint limit) happened
     if k:
-        np.testing.assert_allclose(info["cost"], np.maximum(0, info["constraints"].max(axis=1)), rtol=1e-6)
+        np.testing.assert_allclose(info["cost_continuous"], np.maximum(0, info["constraints"].max(axis=1)), rtol=1e-6)
+        events = np.zeros(N, dtype=bool)
+        for name in env.cost_events:
+            events |= info[name] > 0
+        want = np.any(info["constraints"] > env.constraint_tolerance, axis=1) | events
+        np.testing.assert_array_equal(info["cost"], want.astype(np.float32))
+    else:
+        assert not info["cost"].any() and not info["cost_continuous"].any()
     if env.safety == "atacom":
         assert info["atacom_status"].dtype == np.uint32
         np.testing.assert_allclose(info["max_constraint"], info["constraints"].max(axis=1), rtol=1e-6)

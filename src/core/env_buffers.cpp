@@ -12,6 +12,7 @@ void EnvBuffers::resize(const EnvSpec& spec, int n) {
   final_obs.assign(sN * spec.obs_dim, 0.0f);
   reward.assign(sN, 0.0f);
   cost.assign(sN, 0.0f);
+  cost_continuous.assign(sN, 0.0f);
   terminated.assign(sN, 0);
   truncated.assign(sN, 0);
   constraints.assign(sN * spec.num_constraints, 0.0);
@@ -29,6 +30,7 @@ void EnvBuffers::copy_values_from(const EnvBuffers& from) {
   copy(from.final_obs, final_obs);
   copy(from.reward, reward);
   copy(from.cost, cost);
+  copy(from.cost_continuous, cost_continuous);
   copy(from.terminated, terminated);
   copy(from.truncated, truncated);
   copy(from.constraints, constraints);

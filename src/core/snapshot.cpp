@@ -176,6 +176,7 @@ void write_buffers_section(SnapshotWriter& w, const EnvBuffers& b) {
   bin::write_vec(s, b.info);
   bin::write_vec(s, b.episode_return);
   bin::write_vec(s, b.episode_length);
+  bin::write_vec(s, b.cost_continuous);
 }
 
 void read_buffers_section(SnapshotReader& r, EnvBuffers& b) {
@@ -191,6 +192,16 @@ void read_buffers_section(SnapshotReader& r, EnvBuffers& b) {
   get(b.info, "buffers.info");
   get(b.episode_return, "buffers.episode_return");
   get(b.episode_length, "buffers.episode_length");
+  const bool more = s.peek() != std::char_traits<char>::eof();
+  s.clear();  // a peek at the end sets eofbit, which the section's size check (tellg) reads as an error
+  if (more) {
+    get(b.cost_continuous, "buffers.cost_continuous");
+  } else {  // a snapshot of an earlier build: its cost slot held the continuous cost
+    for (size_t i = 0; i < b.cost.size(); ++i) {
+      b.cost_continuous[i] = b.cost[i];
+      b.cost[i] = b.cost[i] > 0.0f ? 1.0f : 0.0f;
+    }
+  }
 }
 
 }  // namespace atacom

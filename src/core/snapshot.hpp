@@ -83,6 +83,10 @@ class SnapshotReader {
 void write_head_section(SnapshotWriter& w, int num_envs, uint64_t config_fingerprint);
 void read_head_section(SnapshotReader& r, int num_envs, uint64_t config_fingerprint);
 // "BUFS": every EnvBuffers array; read into `b`, each array's size must match.
+// cost_continuous comes last: snapshots of builds before it hold the
+// continuous cost in the cost slot and end there; they load with that value
+// as cost_continuous and cost = 1 where it is > 0 (both are rewritten by the
+// next step).
 void write_buffers_section(SnapshotWriter& w, const EnvBuffers& b);
 void read_buffers_section(SnapshotReader& r, EnvBuffers& b);
 

@@ -180,7 +180,7 @@ void SvgCanvas::y_axis(const std::string& ylabel, int yticks) {
   label(12, (py(y0_) + py(y1_)) / 2, ylabel, 12, "middle", "#222", true);
 }
 
-void SvgCanvas::axes(const std::string& xlabel, const std::string& ylabel, int xticks, int yticks) {
+void SvgCanvas::x_ticks(int xticks) {
   line(x0_, y0_, x1_, y0_, "#444");
   const std::vector<double> tx = nice_ticks(x0_, x1_, xticks);
   const std::vector<std::string> lx = format_ticks(tx);
@@ -188,7 +188,16 @@ void SvgCanvas::axes(const std::string& xlabel, const std::string& ylabel, int x
     line(tx[i], y0_, tx[i], y1_, "#ddd", 0.5);
     label(px(tx[i]), py(y0_) + 14, lx[i], 10, "middle");
   }
+}
+
+void SvgCanvas::axes(const std::string& xlabel, const std::string& ylabel, int xticks, int yticks) {
+  x_ticks(xticks);
   y_axis(ylabel, yticks);
+  label((px(x0_) + px(x1_)) / 2, h_ - 6, xlabel, 12, "middle");
+}
+
+void SvgCanvas::x_axis(const std::string& xlabel, int xticks) {
+  x_ticks(xticks);
   label((px(x0_) + px(x1_)) / 2, h_ - 6, xlabel, 12, "middle");
 }
 

@@ -34,6 +34,8 @@ class SvgCanvas {
   void axes(const std::string& xlabel, const std::string& ylabel, int xticks = 5, int yticks = 5);
   // The left axis alone (for category plots, which label x themselves).
   void y_axis(const std::string& ylabel, int yticks = 5);
+  // The bottom axis alone (for plots with their own y ticks, e.g. a log scale).
+  void x_axis(const std::string& xlabel, int xticks = 5);
 
   std::string str() const;
   // Atomic write (temp file + rename); throws std::runtime_error on failure.
@@ -43,6 +45,7 @@ class SvgCanvas {
   double py(double y) const;
 
  private:
+  void x_ticks(int xticks);  // the bottom line, grid and tick labels
   double w_, h_, x0_, x1_, y0_, y1_, m_;
   std::string body_;
 };

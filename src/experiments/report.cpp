@@ -180,7 +180,13 @@ std::string methods_text(const ReportData& d) {
          " resamples per evaluation). P(improvement) of atacom-sac over a baseline: Mann-Whitney form, over all "
          "seed pairs 1 if atacom-sac is better, 1/2 if equal, with a 95% percentile-bootstrap interval (both algorithms' "
          "seeds resampled). Final-policy metrics are the last evaluation; "
-         "training metrics count over all training steps. A run is flagged when its final evaluation return is "
+         "training metrics count over all training steps. Cost: a step costs 1 when a constraint row exceeds its "
+         "stated tolerance or a collision / joint-limit event happens (Safety-Gymnasium's convention); eval_cost_mean "
+         "is the final policy's cost per episode, train_cost the cost summed over training; a cost axis is "
+         "log10(1 + cost) when its largest value is 100 or more; the training cost until the quality target is "
+         "the time-to-target figure's train_cost_to_target (collisions + violating steps, so a step with both "
+         "counts twice there and once in train_cost). Colours are fixed per algorithm in every figure. A run is "
+         "flagged when its final evaluation return is "
          "more than " + short_num(100 * d.opts.drop_return_frac) + "% of |best| below its best evaluation's, or its "
          "final distance more than " + short_num(d.opts.drop_distance) + " m above.";
 }
@@ -264,6 +270,8 @@ ReportResult write_report(const ReportOptions& opts) {
   for (const auto& env : d.envs) {
     figs.emplace_back("box_" + env + ".svg", boxplot_svg(d, env));
     figs.emplace_back("curves_" + env + ".svg", curves_svg(d, env));
+    figs.emplace_back("cost_return_" + env + ".svg", cost_return_svg(d, env));
+    figs.emplace_back("train_cost_" + env + ".svg", train_cost_svg(d, env));
     bool any = false;
     for (const Row& r : trows) any = any || r.env == env;
     if (!any) continue;
@@ -290,10 +298,12 @@ ReportResult write_report(const ReportOptions& opts) {
        << " runs finished.</p>" << (few.empty() ? "" : "<p class=\"note\"><b>" + html_escape(few) + "</b></p>")
        << "<p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
   for (const auto& env : d.envs) {
-    md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n";
+    md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n"
+       << "![cost and return](cost_return_" << env << ".svg)\n\n![training cost](train_cost_" << env << ".svg)\n\n";
     html << "<h2>" << html_escape(env) << "</h2>\n";
     for (const auto& [f, svg] : figs)
-      if (f == "box_" + env + ".svg" || f == "curves_" + env + ".svg") html << "<div>" << svg << "</div>\n";
+      for (const char* kind : {"box_", "curves_", "cost_return_", "train_cost_"})
+        if (f == kind + env + ".svg") html << "<div>" << svg << "</div>\n";
     md << "| algo | metric | n | IQM [95% CI] | mean +- std | median [q1, q3] |\n|---|---|---|---|---|---|\n";
     html << "<table><tr><th>algo</th><th>metric</th><th>n</th><th>IQM [95% CI]</th><th>mean &plusmn; std</th>"
             "<th>median [q1, q3]</th></tr>\n";

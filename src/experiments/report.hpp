@@ -12,6 +12,9 @@
 //   target_<env>.svg      the same for the censored metrics (envs with a quality target), runs that
 //                         never met it drawn on a "not reached" line, "reached k/n" under each box
 //   curves_<env>.svg      eval return and final distance vs env steps: IQM over seeds, bootstrap band
+//   cost_return_<env>.svg final return vs the final policy's episode cost and vs the training cost:
+//                         a point per seed, an IQM diamond per algorithm
+//   train_cost_<env>.svg  cumulative training cost vs env steps: IQM over seeds, bootstrap band
 //   index.html            figures and tables in one page (inline SVG: opens from file://, no network)
 // Statistics: src/experiments/report_stats.hpp.
 #pragma once

@@ -23,6 +23,8 @@ const std::vector<ReportMetric>& report_metrics() {
       {"avg_episode_steps", "episode steps (final policy)", true, false},
       {"train_collisions", "collisions (training)", false, true},
       {"train_violations", "constraint-violating steps (training)", false, true},
+      {"train_cost", "cost steps (training)", false, true},
+      {"eval_cost_mean", "episode cost (final policy)", false, true},
       {"eval_return_mean", "return (final policy)", true, false},
       {"best.eval_return_mean", "return (best evaluation)", true, false},
       {"best.eval_discounted_return_mean", "discounted return (best evaluation)", true, false},
@@ -101,7 +103,7 @@ void read_curves(const std::string& dir, const std::string& rel, ReportRun& r) {
       if (cols[i] == name) return int(i);
     return -1;
   };
-  const int cs = col("env_steps"), cr = col("eval_return_mean"), cd = col("final_distance");
+  const int cs = col("env_steps"), cr = col("eval_return_mean"), cd = col("final_distance"), cc = col("train_cost");
   if (cs < 0 || cr < 0) return;
   while (std::getline(f, line)) {
     std::vector<double> v;
@@ -117,6 +119,7 @@ void read_curves(const std::string& dir, const std::string& rel, ReportRun& r) {
     r.steps.push_back(v[size_t(cs)]);
     r.eval_return.push_back(v[size_t(cr)]);
     if (cd >= 0) r.final_distance.push_back(v[size_t(cd)]);
+    if (cc >= 0) r.train_cost.push_back(v[size_t(cc)]);
   }
 }
 

@@ -11,12 +11,15 @@
 
 namespace atacom {
 
+class SvgCanvas;
+
 struct ReportRun {
   SweepCell cell;
   std::string state, log;      // sweep state (done, failed, ...) and log path
   bool finished = false;       // summary.json covering the spec's steps
   nlohmann::json summary;      // null unless finished
   std::vector<double> steps, eval_return, final_distance;  // progress.csv curves (empty when absent)
+  std::vector<double> train_cost;  // progress.csv's train_cost per row (empty: a run of a build before it)
 };
 
 struct ReportData {
@@ -37,9 +40,22 @@ std::optional<double> censored_value(const nlohmann::json& summary, const std::s
 std::vector<double> metric_values(const ReportData& d, const std::string& env, const std::string& algo,
                                   const std::string& key);
 
-std::string algo_color(size_t algo_index);
+// Figures, one file each (the colours: train/algorithms.hpp, algorithm_color).
 std::string boxplot_svg(const ReportData& d, const std::string& env);         // the boxplot metrics
 std::string target_boxplot_svg(const ReportData& d, const std::string& env);  // the censored metrics
 std::string curves_svg(const ReportData& d, const std::string& env);
+// cost_return_<env>.svg: final return against the final policy's episode
+// cost and against the run's training cost, a point per seed and the IQM of
+// both coordinates per algorithm (src/experiments/report_cost_figures.cpp).
+std::string cost_return_svg(const ReportData& d, const std::string& env);
+// train_cost_<env>.svg: cumulative training cost against env steps, IQM over
+// seeds with a bootstrap band, for every algorithm that trains.
+std::string train_cost_svg(const ReportData& d, const std::string& env);
+
+// Shared pieces of the figures (report_figures.cpp).
+std::string svg_placed(const SvgCanvas& c, double x, double y);  // a canvas at (x, y) inside a bigger SVG
+std::string svg_figure(double w, double h, const std::string& title, const std::vector<std::string>& algos,
+                       const std::vector<bool>& dashed, const std::string& body);  // title, legend, body
+void pad_range(double& lo, double& hi);  // 6 % padding, at least a billionth of the magnitude wide
 
 }  // namespace atacom

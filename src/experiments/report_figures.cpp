@@ -11,16 +11,8 @@
 
 namespace atacom {
 
-std::string algo_color(size_t i) {
-  static const char* palette[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
-                                  "#7f7f7f", "#bcbd22", "#17becf"};
-  return palette[i % 10];
-}
-
-namespace {
-
 // A canvas placed at (x, y) inside a bigger SVG.
-std::string placed(const SvgCanvas& c, double x, double y) {
+std::string svg_placed(const SvgCanvas& c, double x, double y) {
   std::string s = c.str();
   const size_t at = s.find("<svg ");
   char b[64];
@@ -28,8 +20,8 @@ std::string placed(const SvgCanvas& c, double x, double y) {
   return s.replace(at, 5, b);
 }
 
-std::string outer(double w, double h, const std::string& title, const std::vector<std::string>& algos,
-                  const std::vector<bool>& dashed, const std::string& body) {
+std::string svg_figure(double w, double h, const std::string& title, const std::vector<std::string>& algos,
+                       const std::vector<bool>& dashed, const std::string& body) {
   char head[256];
   std::snprintf(head, sizeof(head),
                 "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\">\n"
@@ -44,7 +36,7 @@ std::string outer(double w, double h, const std::string& title, const std::vecto
     std::snprintf(b, sizeof(b),
                   "<line x1=\"%.0f\" y1=\"38\" x2=\"%.0f\" y2=\"38\" stroke=\"%s\" stroke-width=\"4\"%s/>"
                   "<text x=\"%.0f\" y=\"42\" font-family=\"sans-serif\" font-size=\"12\">%s</text>\n",
-                  x, x + 18, algo_color(i).c_str(), dashed[i] ? " stroke-dasharray=\"4 2\"" : "", x + 22,
+                  x, x + 18, algorithm_color(algos[i]).c_str(), dashed[i] ? " stroke-dasharray=\"4 2\"" : "", x + 22,
                   svg_escape(algos[i]).c_str());
     s += b;
     x += 34 + 7.0 * double(algos[i].size());
@@ -56,15 +48,13 @@ std::string outer(double w, double h, const std::string& title, const std::vecto
 // equal but for their last bits (500 and 499.99999999999994) get a readable
 // axis, not one with ticks finer than the doubles can tell apart. Halves
 // keep hi - lo of +-1e308 finite.
-void padded(double& lo, double& hi) {
+void pad_range(double& lo, double& hi) {
   const double mag = std::max({std::abs(lo), std::abs(hi), 1.0});
   const double mid = lo / 2 + hi / 2, half = std::max(hi / 2 - lo / 2, 0.5e-9 * mag);
   const double pad = 1.06 * half;
   lo = mid - pad;
   hi = mid + pad;
 }
-
-}  // namespace
 
 namespace {
 
@@ -90,7 +80,7 @@ std::string box_grid(const ReportData& d, const std::string& env, const std::vec
       }
     }
     if (!std::isfinite(lo)) lo = 0, hi = 1;
-    padded(lo, hi);
+    pad_range(lo, hi);
     double never = hi;  // the "not reached" line
     if (censored) {
       never = hi + 0.1 * (hi - lo);
@@ -110,7 +100,9 @@ std::string box_grid(const ReportData& d, const std::string& env, const std::vec
     for (size_t i = 0; i < vals.size(); ++i) {
       const std::vector<double>& v = vals[i];
       const double x = double(i) + 0.5;
-      const std::string col = algo_color(i);
+      const std::string col = algorithm_color(d.algos[i]);
+      // The algorithm's name under its box (two staggered rows: long names do not collide).
+      c.label(c.px(x), c.py(lo) + (i % 2 ? 23 : 12), d.algos[i], 8.5, "middle", "#222");
       if (v.empty()) {
         c.text(x, (lo + hi) / 2, "no runs", 9, "middle", "#999");
         continue;
@@ -130,14 +122,14 @@ std::string box_grid(const ReportData& d, const std::string& env, const std::vec
       if (m.censored) {
         size_t reached = 0;
         for (double y : v) reached += std::isfinite(y);
-        c.label(c.px(x), c.py(lo) + 16, std::to_string(reached) + "/" + std::to_string(v.size()) + " reached", 10,
+        c.label(c.px(x), c.py(lo) + 34, std::to_string(reached) + "/" + std::to_string(v.size()) + " reached", 10,
                 "middle", "#444");  // below the plot area
       }
     }
-    body += placed(c, double(p % cols) * pw, top + double(p / cols) * ph);
+    body += svg_placed(c, double(p % cols) * pw, top + double(p / cols) * ph);
   }
   std::vector<bool> dashed(d.algos.size(), false);
-  return outer(cols * pw, top + rows * ph, title, d.algos, dashed, body);
+  return svg_figure(cols * pw, top + rows * ph, title, d.algos, dashed, body);
 }
 
 }  // namespace
@@ -202,7 +194,7 @@ std::string curves_svg(const ReportData& d, const std::string& env) {
       }
     }
     if (!std::isfinite(lo)) continue;  // the env has no such column (no final distance)
-    padded(lo, hi);
+    pad_range(lo, hi);
     SvgCanvas c(pw, ph, 0, xmax, lo, hi, 50);
     c.axes("env steps", panel == 0 ? "eval return" : "final distance [m]", 5, 5);
     c.label(pw / 2, 18,
@@ -213,7 +205,7 @@ std::string curves_svg(const ReportData& d, const std::string& env) {
     for (size_t i = 0; i < series.size(); ++i) {
       const Series& s = series[i];
       if (s.x.empty()) continue;
-      const std::string col = algo_color(i);
+      const std::string col = algorithm_color(d.algos[i]);
       if (s.flat) {
         c.polygon({{0, s.low[0]}, {xmax, s.low[0]}, {xmax, s.high[0]}, {0, s.high[0]}}, col, 0.12);
         c.line(0, s.mid[0], xmax, s.mid[0], col, 1.5, "6 3");
@@ -229,9 +221,9 @@ std::string curves_svg(const ReportData& d, const std::string& env) {
       c.polyline(line, col, 2.0);
       for (const auto& [x, y] : line) c.circle(x, y, xmax * 0.004, col);
     }
-    body += placed(c, panel * pw, top);
+    body += svg_placed(c, panel * pw, top);
   }
-  return outer(2 * pw, top + ph, env + ": learning curves (dashed: policies that do not train)", d.algos, dashed,
+  return svg_figure(2 * pw, top + ph, env + ": learning curves (dashed: policies that do not train)", d.algos, dashed,
                body);
 }
 

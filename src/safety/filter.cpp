@@ -30,7 +30,8 @@ json status_flags(uint32_t st) {
 json process(const json& j) {
   if (!j.is_object()) fail("expected a JSON object");
   static const char* known[] = {"f", "G", "J_q", "c", "alpha", "J_x", "xdot", "slack", "beta",
-                                "tol", "K_c", "basis", "bounds", "equality", "id", "method", "dt", "threshold"};
+                                "tol", "K_c", "basis", "bounds", "equality", "id", "method", "dt", "threshold",
+                                "gamma"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     bool ok = false;
     for (const char* kname : known) ok = ok || it.key() == kname;
@@ -87,7 +88,7 @@ json process(const json& j) {
     }
   }
   B.alpha = alpha;
-  if (method == "safelayer") return safelayer_filter(j, model, B);
+  if (method != "atacom") return safelayer_filter(j, model, B);  // safelayer, cbf
   project_batch(model, B, {.store_basis = false, .parallel = false});
 
   std::vector<double> qdot(n);

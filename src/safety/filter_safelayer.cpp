@@ -1,9 +1,11 @@
 #include "src/safety/filter_safelayer.hpp"
 
+#include <iterator>
 #include <stdexcept>
 #include <vector>
 
 #include "atacom/safelayer.hpp"
+#include "src/safety/cbf_env.hpp"
 #include "src/safety/filter_json.hpp"
 
 namespace atacom {
@@ -29,31 +31,44 @@ std::string filter_method(const json& j) {
   std::string method = "atacom";
   if (j.contains("method")) {
     const json& v = j.at("method");
-    if (!v.is_string() || (v.get<std::string>() != "atacom" && v.get<std::string>() != "safelayer"))
-      throw std::invalid_argument("'method' must be \"atacom\" or \"safelayer\"");
+    if (!v.is_string() || (v.get<std::string>() != "atacom" && v.get<std::string>() != "safelayer" &&
+                           v.get<std::string>() != "cbf"))
+      throw std::invalid_argument("'method' must be \"atacom\", \"safelayer\" or \"cbf\"");
     method = v.get<std::string>();
   }
   static const char* atacom_only[] = {"slack", "beta", "tol", "K_c", "basis", "bounds", "equality"};
   static const char* safelayer_only[] = {"dt", "threshold"};
-  if (method == "safelayer") {
-    for (const char* key : atacom_only)
-      if (j.contains(key)) throw std::invalid_argument(std::string("'") + key + "' is an ATACOM key; \"method\": \"safelayer\" takes dt and threshold");
-  } else {
-    for (const char* key : safelayer_only)
-      if (j.contains(key)) throw std::invalid_argument(std::string("'") + key + "' needs \"method\": \"safelayer\"");
-  }
+  static const char* cbf_only[] = {"gamma"};
+  auto refuse = [&](const char* const* keys, size_t n, const std::string& why) {
+    for (size_t i = 0; i < n; ++i)
+      if (j.contains(keys[i])) throw std::invalid_argument(std::string("'") + keys[i] + "' " + why);
+  };
+  if (method != "atacom")
+    refuse(atacom_only, std::size(atacom_only), "is an ATACOM key; \"method\": \"" + method + "\" takes " +
+                                                    (method == "cbf" ? "gamma" : "dt and threshold"));
+  if (method != "safelayer") refuse(safelayer_only, std::size(safelayer_only), "needs \"method\": \"safelayer\"");
+  if (method != "cbf") refuse(cbf_only, std::size(cbf_only), "needs \"method\": \"cbf\"");
   return method;
 }
 
 json safelayer_filter(const json& j, const ProjectorModel& model, const ProjectorBatch& B) {
   const int n = model.n, m = model.m, k = model.k;
-  double dt = 1.0 / 30.0;
-  if (j.contains("dt")) {
-    dt = number(j.at("dt"), "dt");
-    if (!(dt > 0)) throw std::invalid_argument("'dt' must be > 0");
+  SafeLayerModel sm;
+  if (filter_method(j) == "cbf") {
+    double gamma = kCbfDefaultGamma;
+    if (j.contains("gamma")) {
+      gamma = number(j.at("gamma"), "gamma");
+      if (!(gamma > 0)) throw std::invalid_argument("'gamma' must be > 0");
+    }
+    sm = cbf_model(model, gamma);
+  } else {
+    double dt = 1.0 / 30.0;
+    if (j.contains("dt")) {
+      dt = number(j.at("dt"), "dt");
+      if (!(dt > 0)) throw std::invalid_argument("'dt' must be > 0");
+    }
+    sm = safelayer_model(model, dt, per_row<double>(j, "threshold", k, 0.0, number));
   }
-  const std::vector<double> threshold = per_row<double>(j, "threshold", k, 0.0, number);
-  const SafeLayerModel sm = safelayer_model(model, dt, threshold);
   SafeLayerBatch out(sm, 1);
   safelayer_batch(sm, B, out, {.store_active_rows = true, .parallel = false});
   std::vector<double> qdot(n);

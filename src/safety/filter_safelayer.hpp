@@ -1,4 +1,6 @@
-// `atacom filter` with "method": "safelayer" (issue 9, section 2).
+// `atacom filter` with "method": "safelayer" (issue 9, section 2) or "cbf"
+// (issue 32: the same QP with the rows J_q (f + G a) + J_x xdot <= -gamma c,
+// key gamma > 0, default 10; src/safety/cbf_env.hpp).
 //
 // Extra keys: dt (> 0, default 1/30) and threshold (C: a number or one per
 // row, default 0). a_pi = clip(alpha, -1, 1); the output a is the exact
@@ -18,11 +20,11 @@
 
 namespace atacom {
 
-// "atacom" (default) or "safelayer"; throws std::invalid_argument for any
-// other value and for keys that belong to the other method.
+// "atacom" (default), "safelayer" or "cbf"; throws std::invalid_argument for
+// any other value and for keys that belong to another method.
 std::string filter_method(const nlohmann::json& j);
 
-// The SafeLayer answer for the parsed inputs (B holds one env; model its shapes).
+// The SafeLayer or CBF answer for the parsed inputs (B holds one env; model its shapes).
 nlohmann::json safelayer_filter(const nlohmann::json& j, const ProjectorModel& model, const ProjectorBatch& B);
 
 }  // namespace atacom

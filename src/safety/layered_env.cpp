@@ -103,6 +103,7 @@ void LayeredEnv::mirror_rows(int lo, int hi) {
   rows(in.final_obs, out.final_obs, d);
   rows(in.reward, out.reward, 1);
   rows(in.cost, out.cost, 1);
+  rows(in.cost_continuous, out.cost_continuous, 1);
   rows(in.terminated, out.terminated, 1);
   rows(in.truncated, out.truncated, 1);
   rows(in.constraints, out.constraints, k);

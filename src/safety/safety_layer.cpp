@@ -9,6 +9,7 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/safe_env.hpp"
 #include "src/core/config_json.hpp"
+#include "src/safety/cbf_env.hpp"
 #include "src/safety/safe_layer_env.hpp"
 
 namespace atacom {
@@ -24,6 +25,8 @@ const std::vector<SafetyLayerEntry>& safety_layer_entries() {
        wrap_atacom},
       {"safelayer", "SafeLayer", "Dalal et al.'s correction of the action on the analytic rows (docs/safelayer.md)",
        no_params, wrap_safelayer},
+      {"cbf", "CBF", "the control-barrier-function QP: no row approaches its boundary faster than gamma c (src/safety/cbf_env.hpp)",
+       cbf_default_params, wrap_cbf},
   };
   return entries;
 }
