@@ -1,5 +1,6 @@
 """The examples run (short versions) and say what they claim."""
 import importlib.util
+import json
 import os
 import subprocess
 import sys
@@ -38,3 +39,21 @@ def test_sac_torch_example_without_torch_says_so(tmp_path):
                        timeout=60, env=env)
     assert r.returncode == 0
     assert "sac_torch.py skipped: PyTorch is not installed (Debian: apt-get install python3-torch)" in r.stdout
+
+
+def test_hri_upright_probe_keeps_the_cup_upright():
+    r = run("hri_upright_probe.py", "--episodes", "1", "--steps", "30")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "episodes above 25 deg: 0 of 1" in r.stdout
+
+
+def test_hri_tilt_trace_reads_a_run(tmp_path, cli):
+    cfg = tmp_path / "hri.json"
+    cfg.write_text(json.dumps({"ppo": {"actor": {"hidden": [8]}, "critic": {"hidden": [8]}, "minibatch_size": 32},
+                               "train": {"env": "hri", "algo": "atacom-ppo", "steps": 128, "num_envs": 4,
+                                         "eval_every": 128, "eval_episodes": 1}}))
+    rc, _, err = cli(["--threads", "1", "train", "--config", str(cfg), "--out", str(tmp_path / "run")])
+    assert rc == 0, err
+    r = run("hri_tilt_trace.py", str(tmp_path / "run"), "--episodes", "2", "--steps", "12")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "of 2; above 15 deg:" in r.stdout and "t= 10" in r.stdout
