@@ -68,12 +68,12 @@ std::string duration(double s) {
 }
 
 // The dry run's last lines: estimated run time of the cells still to run.
-std::string sweep_cost_text(const std::vector<SweepCell>& cells, const std::vector<size_t>& todo, int jobs,
+std::string sweep_cost_text(const std::vector<SweepCell>& cells, const std::vector<size_t>& to_run, int jobs,
                             int threads) {
-  if (todo.empty()) return "estimate: nothing left to run\n";
+  if (to_run.empty()) return "estimate: nothing left to run\n";
   SweepCost c;
   try {
-    c = estimate_sweep_cost(cells, todo);
+    c = estimate_sweep_cost(cells, to_run);
   } catch (const std::exception& e) {
     return std::string("estimate: not available (") + e.what() + ")\n";
   }
@@ -130,12 +130,12 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
       *opts.log << ", " << jobs << " at a time, " << threads << " threads each\n";
       std::error_code ec;
       const std::string self = fs::read_symlink("/proc/self/exe", ec).string();  // the binary it names
-      std::vector<size_t> todo;  // the cells to run, for the estimate
+      std::vector<size_t> to_run;  // the cells to run, for the estimate
       for (size_t k : mine) {  // streamed: one line in memory at a time
         const std::string st = dir.empty() ? "fresh" : run_files_state(dir, cells[k]);
         *opts.log << cells[k].name() << "  " << (st == "fresh" ? "to run" : st == "partial" ? "to resume" : "done");
         if (st != "done") {
-          todo.push_back(k);
+          to_run.push_back(k);
           if (!dir.empty()) {
             *opts.log << "  ";
             std::vector<std::string> cmd = command(cells[k], st == "partial");
@@ -145,7 +145,7 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
         }
         *opts.log << "\n";
       }
-      *opts.log << sweep_cost_text(cells, todo, busy, threads);
+      *opts.log << sweep_cost_text(cells, to_run, busy, threads);
     }
     return 0;
   }
