@@ -175,13 +175,14 @@ void ArmModel::build_goal_library() {
       any_in = any_in || in[l];
     }
     if (!any_in) continue;
-    if (hri()) {
-      // The cup's tilt needs only FK: test it before the (learned) fields, which cost 50x more.
-      lanes::arm_upright_row_lanes(kc, fk, o, false);
-      any_in = false;
-      for (int l = 0; l < kLanes; ++l) any_in = any_in || (in[l] && cup_upright(o, l));
-      if (!any_in) continue;
-    }
+    // The cup's tilt and the ground truth need only FK: test them before the
+    // (learned) fields, which cost far more; the same lanes pass in the end.
+    if (hri()) lanes::arm_upright_row_lanes(kc, fk, o, false);
+    lanes::arm_ground_truth_lanes(kc, ql, fk, o, kLanes);
+    any_in = false;
+    for (int l = 0; l < kLanes; ++l)
+      any_in = any_in || (in[l] && !o.collision[l] && !o.joint_violation[l] && cup_upright(o, l));
+    if (!any_in) continue;
     lanes::arm_constraints_lanes(kc, ql, fk, o, false);
     if (hri()) lanes::arm_upright_row_lanes(kc, fk, o, false);  // the cup axis (and the upright row when composed)
     lanes::arm_ground_truth_lanes(kc, ql, fk, o, kLanes);
