@@ -23,3 +23,8 @@
 #else
 #define ATACOM_TEST_GCC 0
 #endif
+
+// The sanitizer build runs the fast tests again for memory and UB errors, at
+// 20-50x the cost per step: the statistical and round-trip tests whose loops
+// dominate CI take a quarter of their workload there (the same code paths).
+constexpr int sanitizer_scaled(int n, int divisor = 4) { return ATACOM_TEST_SANITIZED ? n / divisor : n; }

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "build_kind.hpp"
 #include "atacom/env_registry.hpp"
 #include "atacom/make_env.hpp"
 #include "atacom/evaluate.hpp"
@@ -373,7 +374,7 @@ TEST_CASE("hri: random alpha through ATACOM on held-out motion: 20x fewer human 
   // Analytic fields (fast); the learned default is the [slow] case below.
   const nlohmann::json cfg = {{"hri", {{"split", "test"}}},
                               {"sdf", {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}}}};
-  const int N = 512, steps = 1000;  // two episodes per env with ATACOM
+  const int N = sanitizer_scaled(512, 2), steps = 1000;  // two episodes per env with ATACOM
   long human[2] = {0, 0}, other[2] = {0, 0}, over = 0, over_feasible = 0;
   double max_excess = -INFINITY;
   int worst_row = -1;
