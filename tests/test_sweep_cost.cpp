@@ -42,6 +42,28 @@ TEST_CASE("sweep cost: a cell's seconds from the measured rates", "[sweep_cost]"
   CHECK(c.source.find("sweep_rates.sh") != std::string::npos);
 }
 
+TEST_CASE("sweep cost: a learner's update seconds scale with its work per env step; CBF takes SafeLayer's rates",
+          "[sweep_cost]") {
+  auto seconds = [](const std::string& algo, const json& overrides) {
+    json j = {{"envs", {"table"}}, {"algos", {algo}}, {"seeds", {0}}, {"steps", 100000}, {"num_envs", 4},
+              {"overrides", {{"*/*", overrides}}}};
+    j["overrides"]["*/*"]["train"] = {{"eval_every", 100000}, {"eval_episodes", 1}};
+    return estimate_cell_seconds(sweep_cells(parse_sweep_spec(j))[0]);
+  };
+  const double base = seconds("atacom-sac", json::object());
+  // Half the updates: the update part halves (the collect part stays).
+  const double half = seconds("atacom-sac", {{"sac", {{"updates_per_step", 0.5}}}});
+  const double none = seconds("atacom-sac", {{"sac", {{"updates_per_step", 1e-9}}}});
+  CHECK(half == Approx(0.5 * (base + none)).epsilon(1e-6));
+  // Twice the batch: the update part doubles.
+  CHECK(seconds("atacom-sac", {{"sac", {{"batch_size", 128}}}}) == Approx(2 * base - none).epsilon(1e-6));
+  // The Lagrangian's cost critics add work; CBF is SafeLayer's QP with another right-hand side.
+  CHECK(seconds("sac-lag", json::object()) > seconds("sac", json::object()));
+  CHECK(seconds("cbf-sac", json::object()) == Approx(seconds("safelayer-sac", json::object())));
+  // PPO's work grows with its epochs.
+  CHECK(seconds("atacom-ppo", {{"ppo", {{"epochs", 10}}}}) > seconds("atacom-ppo", {{"ppo", {{"epochs", 5}}}}));
+}
+
 TEST_CASE("sweep --dry-run without --out: the cells and the estimate, nothing written, no paths", "[sweep_cost]") {
   const fs::path dir = fs::temp_directory_path() / ("atacom_sweep_cost_" + std::to_string(::getpid()));
   fs::remove_all(dir);

@@ -2,13 +2,16 @@
 // cell's CPU seconds from measured rates (data/sweep_rates.json, written by
 // bench/sweep_rates.sh, which records its command, CPU and date), summed.
 //
-// A learner's cell: the steps before updates start (sac.initial_replay) at
-// the collect rate, the rest at the training rate, plus every evaluation
-// (ceil(steps / eval_every) of them) as eval_episodes full-horizon episodes
-// at the evaluation rate; a cell that does not learn: one evaluation.
-// Episodes that end early make the real cost lower (the evaluation part is
-// an upper bound). Rates are env steps per CPU second of a one-thread run;
-// another CPU, other network sizes or updates_per_step change them.
+// A learner's cell: every step at the collect rate, and the steps after
+// sac.initial_replay with the update seconds the rates imply (training minus
+// collect) for SAC with the env's paper-preset settings, scaled by the
+// learner's work per env step against that reference (updates per step,
+// batch, network sizes; PPO's epochs; the Lagrangian's cost critics), plus
+// every evaluation (ceil(steps / eval_every) of them) as eval_episodes
+// full-horizon episodes at the evaluation rate; a cell that does not learn:
+// one evaluation. Episodes that end early make the real cost lower (the
+// evaluation part is an upper bound). Rates are env steps per CPU second of a
+// one-thread run on the CPU the file names; CBF takes SafeLayer's rates.
 #pragma once
 #include <string>
 #include <vector>
