@@ -32,6 +32,9 @@ NavModel::NavModel(const NavConfig& c) : config(c) {
                      "at_goal",       "fetch_distance", "fetch_goals",     "nan_action"};
   spec.info_reduce = {InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Last, InfoReduce::Mean,
                       InfoReduce::Last, InfoReduce::Last, InfoReduce::Sum,  InfoReduce::Sum};
+  spec.info_role = {InfoRole::AnyContact, InfoRole::Contact,    InfoRole::Contact,    InfoRole::GoalDistance,
+                    InfoRole::Diagnostic, InfoRole::Diagnostic, InfoRole::Diagnostic, InfoRole::Diagnostic,
+                    InfoRole::Diagnostic};
   spec.cost_events = {"collision"};  // wall or Fetch contact
   spec.target = config.target;
   check_env_target(spec);
