@@ -387,47 +387,6 @@ TEST_CASE("nav env: same-step autoreset and truncation at the horizon", "[nav_en
   REQUIRE(env.buffers().episode_return[0] == Approx(20 * (-0.5 - heading)).epsilon(1e-6));
 }
 
-TEST_CASE("nav env: reward terms at a scripted state", "[nav_env]") {
-  NavEnv env(default_nav_config(), 1);
-  const double tp[3] = {0.0, 0.0, 0.0}, fp[3] = {2.0, 1.5, 0.0}, fgoal[2] = {2.0, 1.0};
-  {  // goal 0.1 m ahead: inside 0.2 m, bonus; action change from 0 to (1, 0)
-    const double goal[2] = {0.15, 0.0};
-    env.place(0, tp, fp, goal, fgoal);
-    const double a[2] = {1.0, 0.0};
-    env.step(a);
-    const double dist = 0.15 - 1.0 / 30.0;
-    const double expect = -dist - 0.0 - 0.1 * 1.0 + 10.0;
-    REQUIRE(env.buffers().reward[0] == Approx(expect).epsilon(1e-5));
-    REQUIRE(env.buffers().info[kNavInfoAtGoal] == 1.0f);
-    REQUIRE(env.buffers().info[kNavInfoFinalDistance] == Approx(dist).epsilon(1e-5));
-  }
-  {  // goal 2 m behind: full heading penalty |pi| * sigmoid(20 * 1.7) / pi = 1
-    const double goal[2] = {-2.0, 0.0};
-    env.place(0, tp, fp, goal, fgoal);
-    const double a[2] = {0.0, 0.0};
-    env.step(a);
-    REQUIRE(env.buffers().reward[0] == Approx(-2.0 - 1.0).epsilon(1e-6));
-  }
-}
-
-TEST_CASE("nav env: NaN actions become 0 and are counted, out-of-range actions are clipped", "[nav_env]") {
-  NavEnv env(default_nav_config(), 2);
-  const double tp[3] = {0.0, 0.0, 0.0}, fp[3] = {2.0, 1.5, 0.0}, goal[2] = {-2.0, 0.0}, fgoal[2] = {2.0, 1.0};
-  env.place(0, tp, fp, goal, fgoal);
-  env.place(1, tp, fp, goal, fgoal);
-  const double a[4] = {std::nan(""), 5.0, 7.0, -std::numeric_limits<double>::infinity()};
-  env.step(a);
-  REQUIRE(env.buffers().info[kNavInfoNanAction] == 1.0f);
-  REQUIRE(env.buffers().info[kNavInfoCount + kNavInfoNanAction] == 0.0f);
-  REQUIRE(env.state().prev_action[0] == 0.0);
-  REQUIRE(env.state().prev_action[1] == 1.0);
-  REQUIRE(env.state().prev_action[2] == 1.0);
-  REQUIRE(env.state().prev_action[3] == -1.0);
-  REQUIRE(env.state().tiago[0] == 0.0);
-  const double h = M_PI / 180;  // half the turn of one step at omega = -pi/3
-  REQUIRE(env.state().tiago[3] == Approx(1.0 / 30.0 * std::sin(h) / h * std::cos(h)).epsilon(1e-6));
-}
-
 TEST_CASE("nav env: identical across thread counts, block sizes and N", "[nav_env]") {
   const int steps = 600;  // crosses collisions and the 500-step horizon
   auto run = [&](int N, int threads, int block) {

@@ -27,6 +27,7 @@ class LineEnv final : public ControlAffineEnv {
     spec_.constraint_names = {"wall"};
     spec_.info_names = {"collision"};
     spec_.info_reduce = {InfoReduce::Sum};
+    spec_.info_role = {InfoRole::AnyContact};
     buffers_.resize(spec_, N);
   }
   const EnvSpec& spec() const override { return spec_; }

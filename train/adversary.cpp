@@ -80,10 +80,8 @@ AdversaryLearner::AdversaryLearner(const LearnerContext& ctx, const AdversaryCon
     }
     scale_[size_t(r)] = std::max(cfg_.scale_floor, n ? s / n : 0.0);
   }
-  for (int col = 0; col < ni_; ++col) {
-    const std::string& name = spec_.info_names[size_t(col)];
-    if (name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0) collision_cols_.push_back(col);
-  }
+  for (int col = 0; col < ni_; ++col)
+    if (is_contact(spec_.role(size_t(col)))) collision_cols_.push_back(col);
   reward_.assign(size_t(N_), 0.0f);
   current_.resize(size_t(N_));
 }

@@ -11,8 +11,8 @@
 // sets the reward (about -1 at a typical start, 0 on a boundary, up to
 // reward_cap beyond it). Rewards are <= 0 until a boundary is crossed, so
 // ending an episode early (a collision terminates it) pays as well, and the
-// bonus marks the collision itself. The collision flag is any info column
-// whose name ends in "collision" being > 0.
+// bonus marks the collision itself. The collision flag is any contact info
+// column (InfoRole::Contact, AnyContact) being > 0.
 //
 // Besides the SAC state it tracks the largest constraint value reached and
 // the `worst_states` episodes that came closest (their observation, which

@@ -15,9 +15,6 @@ constexpr uint64_t kEvalStream = uint64_t{2} << 32;  // episode j's action noise
 constexpr uint64_t kEvalSeedSalt = 0x5EEDE7A15EEDE7A1ull;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool ends_with_collision(const std::string& name) {
-  return name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0;
-}
 nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 }  // namespace
 
@@ -102,6 +99,8 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
   const int M = episodes;
   r.episodes = M;
   r.info_names = spec.info_names;
+  r.info_roles.resize(r.info_names.size());
+  for (size_t c = 0; c < r.info_names.size(); ++c) r.info_roles[c] = spec.role(c);
   r.info.assign(size_t(ni), 0.0);
   double s = 0, sd = 0, s2 = 0, sd2 = 0, steps = 0;
   for (int i = 0; i < M; ++i) {
@@ -133,11 +132,9 @@ EvalResult evaluate(BatchEnv& env, Policy& policy, int episodes, uint64_t seed, 
   }
   r.max_constraint = k > 0 && std::isfinite(max_c) ? max_c : kNaN;
   r.episode_max_constraint = k > 0 && std::isfinite(emax_sum) ? emax_sum / M : kNaN;
-  r.final_distance = r.collisions = kNaN;
-  for (int c = 0; c < ni; ++c) {
-    if (spec.info_names[size_t(c)] == "final_distance") r.final_distance = r.info[size_t(c)];
-    if (spec.info_names[size_t(c)] == "collision") r.collisions = r.info[size_t(c)];
-  }
+  const int goal_col = spec.column_with(InfoRole::GoalDistance), contact_col = spec.column_with(InfoRole::AnyContact);
+  r.final_distance = goal_col >= 0 ? r.info[size_t(goal_col)] : kNaN;
+  r.collisions = contact_col >= 0 ? r.info[size_t(contact_col)] : kNaN;
   return r;
 }
 
@@ -171,13 +168,14 @@ nlohmann::json eval_json(const EvalResult& r) {
   for (size_t c = 0; c < r.info_names.size() && c < r.info.size(); ++c) {
     const std::string& name = r.info_names[c];
     s[name] = jnum(r.info[c]);
-    // Collision counts also under the plural names the rollout command and
-    // the issues use: collisions, wall_collisions, ...
-    if (ends_with_collision(name)) s[name + "s"] = jnum(r.info[c]);
+    const InfoRole role = c < r.info_roles.size() ? r.info_roles[c] : InfoRole::Diagnostic;
+    // Contact counts per episode also under the plural names the rollout
+    // command and the issues use: collisions, wall_collisions, ...
+    if (is_contact(role)) s[event_total_name(name, role)] = jnum(r.info[c]);
     // Episodes with a spill (HRI-Sim's per-episode 0/1 columns): a count of
     // the evaluation's episodes, "spills" and "spills_<deg>".
     // (a per-episode mean of 0/1 times the episodes: rounded, so 4 and not 3.9999999999999996).
-    else if (!event_total_name(name).empty()) s[event_total_name(name)] = jnum(std::round(r.info[c] * r.episodes));
+    else if (role == InfoRole::EpisodeEvent) s[event_total_name(name, role)] = jnum(std::round(r.info[c] * r.episodes));
   }
   return s;
 }

@@ -49,9 +49,8 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
   const size_t ni = spec.info_names.size();
   std::vector<int> collision_cols;
   for (size_t c = 0; c < ni; ++c) {
-    const std::string& name = spec.info_names[c];
-    // Event counts: every *collision column, and HRI-Sim's spill columns (episodes with a spill).
-    if (!event_total_name(name).empty()) collision_cols.push_back(int(c));
+    // Event counts: every contact column, and HRI-Sim's spill columns (episodes with a spill).
+    if (!event_total_name(spec.info_names[c], spec.role(c)).empty()) collision_cols.push_back(int(c));
   }
   std::vector<double> collision_sums(collision_cols.size(), 0.0);
   long episodes = 0, terminations = 0, violations = 0, nonfinite = 0;
@@ -102,7 +101,8 @@ nlohmann::json run_rollout(const RolloutConfig& cfg) {
                         {"per_s", done_steps / secs}};
   out["collisions"] = 0;
   for (size_t c = 0; c < collision_cols.size(); ++c) {
-    out[event_total_name(spec.info_names[collision_cols[c]])] = static_cast<long>(std::llround(collision_sums[c]));
+    const size_t col = size_t(collision_cols[c]);
+    out[event_total_name(spec.info_names[col], spec.role(col))] = static_cast<long>(std::llround(collision_sums[c]));
   }
   if (const TrainedPolicy* tp = src.trained.get()) {
     out["run"] = cfg.run_dir;

@@ -33,8 +33,8 @@ struct RolloutConfig {
 // Returns {"env", "policy", "safety", "atacom" (safety == atacom), "envs",
 // "seed", "threads", "steps", "episodes", "terminations", "collisions",
 // "violations", "max_constraint", "nonfinite_constraints", "wall_s",
-// "per_s", ...}: every info column whose name ends in "collision" is also
-// summed as "<name>s" (e.g. wall_collisions); with a trained policy also
+// "per_s", ...}: every contact column (InfoRole) is also summed as "<name>s"
+// (e.g. wall_collisions), every episode-event column as its episodes (spills); with a trained policy also
 // "run", "run_algo", "run_safety". Throws std::invalid_argument for bad
 // input (unknown env/policy, N < 1, a setting that does not apply, ...).
 nlohmann::json run_rollout(const RolloutConfig& config);

@@ -253,12 +253,11 @@ void Run::record(const EvalResult& ev) {
   }
 }
 
-// Training collisions (the env's "collision" column, every contact) plus the
-// steps with a constraint row above its tolerance, so far.
+// Training collisions (the env's every-contact column, InfoRole::AnyContact)
+// plus the steps with a constraint row above its tolerance, so far.
 double Run::train_cost() const {
-  double collisions = 0;
-  for (int col = 0; col < ninfo_; ++col)
-    if (spec_.info_names[size_t(col)] == "collision") collisions = st_.train_info_sums[size_t(col)];
+  const int col = spec_.column_with(InfoRole::AnyContact);
+  const double collisions = col >= 0 ? st_.train_info_sums[size_t(col)] : 0.0;
   return collisions + double(st_.counters.train_violations);
 }
 
@@ -415,7 +414,8 @@ nlohmann::json Run::summary_json(const EvalResult& ev) const {
     const std::string& name = spec_.info_names[size_t(col)];
     s["train_" + name] = jnum(st_.train_info_sums[size_t(col)]);
     // Collision counts also under the plural names: train_collisions, ...
-    if (!event_total_name(name).empty()) s["train_" + event_total_name(name)] = jnum(st_.train_info_sums[size_t(col)]);
+    const std::string total = event_total_name(name, spec_.role(size_t(col)));
+    if (!total.empty()) s["train_" + total] = jnum(st_.train_info_sums[size_t(col)]);
   }
   if (learner_) {
     const nlohmann::json ls = learner_->summary();

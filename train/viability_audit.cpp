@@ -121,10 +121,8 @@ nlohmann::json run_viability_audit(const ViabilityAuditConfig& cfg) {
 
   const size_t ni = spec.info_names.size();
   std::vector<int> collision_cols;
-  for (size_t c = 0; c < ni; ++c) {
-    const std::string& name = spec.info_names[c];
-    if (name.size() >= 9 && name.compare(name.size() - 9, 9, "collision") == 0) collision_cols.push_back(int(c));
-  }
+  for (size_t c = 0; c < ni; ++c)
+    if (is_contact(spec.role(c))) collision_cols.push_back(int(c));
   std::vector<double> collision_sums(collision_cols.size(), 0.0);
   History hist;
   hist.resize(N, k, m);

@@ -310,6 +310,8 @@ void ArmModel::build_spec() {
                   "angle",     "in_region",             "nan_action",     "reset_fallback"};
   s.info_reduce = {InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Last, InfoReduce::Mean,
                    InfoReduce::Mean, InfoReduce::Mean, InfoReduce::Sum,  InfoReduce::Sum};
+  s.info_role = {InfoRole::AnyContact, InfoRole::Diagnostic, InfoRole::GoalDistance, InfoRole::Diagnostic,
+                 InfoRole::Diagnostic, InfoRole::Diagnostic, InfoRole::Diagnostic,   InfoRole::Diagnostic};
   if (hri()) {
     // human_collision: steps in contact with the human (an episode ends there);
     // spill, spill_<deg>: 1 for an episode with a spill at either angle;
@@ -318,6 +320,8 @@ void ArmModel::build_spec() {
                                              config.hri.strict_spill_name()});
     s.info_reduce.insert(s.info_reduce.end(),
                          {InfoReduce::Sum, InfoReduce::Sum, InfoReduce::Last, InfoReduce::Mean, InfoReduce::Sum});
+    s.info_role.insert(s.info_role.end(), {InfoRole::Contact, InfoRole::EpisodeEvent, InfoRole::Diagnostic,
+                                           InfoRole::Diagnostic, InfoRole::EpisodeEvent});
   }
   s.target = config.target;
   check_env_target(s);

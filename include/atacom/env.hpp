@@ -36,15 +36,28 @@ struct EnvTarget {
   bool defined() const { return distance == distance; }
 };
 
-// Info columns that count events, and the name their totals carry in the
-// rollout JSON and the run summaries: "<x>collision" -> "<x>collisions", and
-// HRI-Sim's per-episode spill flags "spill" / "spill_<deg>" -> "spills" /
-// "spills_<deg>"; "" for any other column.
-inline std::string event_total_name(const std::string& c) {
-  if (c.size() >= 9 && c.compare(c.size() - 9, 9, "collision") == 0) return c + "s";
-  if (c == "spill") return "spills";
-  if (c.rfind("spill_", 0) == 0) return "spills" + c.substr(5);
-  return "";
+// What an info column is for, declared by the env beside its name and
+// reduction, so the consumers that pick or total columns (the trainer, the
+// evaluator, rollout, the adversary, render) look the role up, never the name.
+enum class InfoRole : uint8_t {
+  Diagnostic = 0,  // only its own column
+  Contact,         // steps with a ground-truth contact of one kind (nav's wall_collision, HRI's human_collision)
+  AnyContact,      // steps with any ground-truth contact (the env's "collision"): the runs' collision count
+  EpisodeEvent,    // 1 for an episode with the event (HRI-Sim's spill flags): totals count episodes
+  GoalDistance,    // distance to the goal at the episode's end: the quality metric (final_distance)
+};
+
+inline bool is_contact(InfoRole r) { return r == InfoRole::Contact || r == InfoRole::AnyContact; }
+
+// The name an event column's totals carry in the rollout JSON and the run
+// summaries: a contact column "<x>collision" -> "<x>collisions", an episode
+// event "spill" / "spill_<deg>" -> "spills" / "spills_<deg>" (the plural of
+// its first word); "" for a column that counts no events.
+inline std::string event_total_name(const std::string& name, InfoRole role) {
+  if (is_contact(role)) return name + "s";
+  if (role != InfoRole::EpisodeEvent) return "";
+  const size_t word = name.find('_');
+  return word == std::string::npos ? name + "s" : name.substr(0, word) + "s" + name.substr(word);
 }
 
 struct EnvSpec {
@@ -63,7 +76,17 @@ struct EnvSpec {
   std::vector<std::string> cost_events;
   std::vector<std::string> info_names;        // columns of EnvBuffers::info
   std::vector<InfoReduce> info_reduce;        // (info_names.size()) per-episode aggregation
+  std::vector<InfoRole> info_role;            // (info_names.size()) what each column is for; missing entries
+                                              // (a layer's appended columns) are Diagnostic
   EnvTarget target;                           // quality target (undefined: none)
+
+  InfoRole role(size_t col) const { return col < info_role.size() ? info_role[col] : InfoRole::Diagnostic; }
+  // The first column with role r, or -1.
+  int column_with(InfoRole r) const {
+    for (size_t c = 0; c < info_names.size(); ++c)
+      if (role(c) == r) return int(c);
+    return -1;
+  }
 };
 
 struct EnvBuffers {

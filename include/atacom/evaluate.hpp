@@ -31,9 +31,10 @@ struct EvalResult {
   double cost_mean = 0;           // per episode the summed step cost (EnvBuffers::cost, 0 or 1), averaged
   double max_constraint = 0;      // largest constraint value of any row at any step (NaN: no rows)
   double episode_max_constraint = 0;  // per episode the largest value of any row, averaged (NaN: no rows)
-  double final_distance = 0;      // the env's "final_distance" info column (NaN: the env has none)
-  double collisions = 0;          // the env's "collision" info column: ground-truth contacts per episode (NaN: none)
+  double final_distance = 0;      // the env's goal-distance info column (InfoRole::GoalDistance; NaN: the env has none)
+  double collisions = 0;          // the env's every-contact info column (InfoRole::AnyContact): contacts per episode (NaN: none)
   std::vector<std::string> info_names;  // the env's info columns
+  std::vector<InfoRole> info_roles;     // (info_names.size()) what each is for (EnvSpec::info_role)
   std::vector<double> info;       // per info column: reduced per episode (InfoReduce), averaged over episodes
 };
 

@@ -41,7 +41,7 @@ void check_env_target(const EnvSpec& spec) {
       throw std::invalid_argument("config: env.target_zero_info is set for env '" + spec.name + "', which declares no target distance");
     return;
   }
-  if (!has_column(spec, "final_distance"))
+  if (spec.column_with(InfoRole::GoalDistance) < 0)
     throw std::invalid_argument("config: env.target_distance is set for env '" + spec.name +
                                 "', which reports no final_distance");
   for (const std::string& name : t.zero_info) {

@@ -178,11 +178,10 @@ RenderResult render_episode(const RenderConfig& cfg) {
   Policy& policy = src.bind(spec);
   env->seed(cfg.seed);
   Rng rng(cfg.seed, 0x72656e646572ull);  // the policy's own stream ("render")
-  int col_collision = -1, col_limit = -1;
-  for (size_t i = 0; i < spec.info_names.size(); ++i) {
-    if (spec.info_names[i] == "collision") col_collision = static_cast<int>(i);
+  const int col_collision = spec.column_with(InfoRole::AnyContact);
+  int col_limit = -1;
+  for (size_t i = 0; i < spec.info_names.size(); ++i)
     if (spec.info_names[i] == "joint_limit_violation") col_limit = static_cast<int>(i);
-  }
   const int k = spec.num_constraints;
 
   const RenderFrame start = rec->frame(env->buffers().obs.data());
