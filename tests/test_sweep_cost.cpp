@@ -42,7 +42,7 @@ TEST_CASE("sweep cost: a cell's seconds from the measured rates", "[sweep_cost]"
   CHECK(c.source.find("sweep_rates.sh") != std::string::npos);
 }
 
-TEST_CASE("sweep cost: a learner's update seconds scale with its work per env step; CBF takes SafeLayer's rates",
+TEST_CASE("sweep cost: a learner's update seconds scale with its work per env step, CBF takes SafeLayer's rates",
           "[sweep_cost]") {
   auto seconds = [](const std::string& algo, const json& overrides) {
     json j = {{"envs", {"table"}}, {"algos", {algo}}, {"seeds", {0}}, {"steps", 100000}, {"num_envs", 4},
