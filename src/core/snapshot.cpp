@@ -4,6 +4,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "src/core/env_buffer_fields.hpp"
+
 namespace atacom {
 
 std::string snapshot_tag_name(uint32_t tag) {
@@ -165,38 +167,13 @@ void read_head_section(SnapshotReader& r, int num_envs, uint64_t config_fingerpr
 }
 
 void write_buffers_section(SnapshotWriter& w, const EnvBuffers& b) {
-  std::ostream& s = w.section(kTagBuffers);
-  bin::write_vec(s, b.obs);
-  bin::write_vec(s, b.final_obs);
-  bin::write_vec(s, b.reward);
-  bin::write_vec(s, b.cost);
-  bin::write_vec(s, b.terminated);
-  bin::write_vec(s, b.truncated);
-  bin::write_vec(s, b.constraints);
-  bin::write_vec(s, b.info);
-  bin::write_vec(s, b.episode_return);
-  bin::write_vec(s, b.episode_length);
-  bin::write_vec(s, b.cost_continuous);
+  write_fields<EnvBufferFields>(w.section(kTagBuffers), b);
 }
 
 void read_buffers_section(SnapshotReader& r, EnvBuffers& b) {
   std::istream& s = r.section(kTagBuffers, "buffers");
-  auto get = [&](auto& v, const char* what) { bin::read_vec_sized(s, v, what); };
-  get(b.obs, "buffers.obs");
-  get(b.final_obs, "buffers.final_obs");
-  get(b.reward, "buffers.reward");
-  get(b.cost, "buffers.cost");
-  get(b.terminated, "buffers.terminated");
-  get(b.truncated, "buffers.truncated");
-  get(b.constraints, "buffers.constraints");
-  get(b.info, "buffers.info");
-  get(b.episode_return, "buffers.episode_return");
-  get(b.episode_length, "buffers.episode_length");
-  const bool more = s.peek() != std::char_traits<char>::eof();
-  s.clear();  // a peek at the end sets eofbit, which the section's size check (tellg) reads as an error
-  if (more) {
-    get(b.cost_continuous, "buffers.cost_continuous");
-  } else {  // a snapshot of an earlier build: its cost slot held the continuous cost
+  if (!read_fields<EnvBufferFields>(s, b, "buffers.")) {
+    // A snapshot of an earlier build: its cost slot held the continuous cost.
     for (size_t i = 0; i < b.cost.size(); ++i) {
       b.cost_continuous[i] = b.cost[i];
       b.cost[i] = b.cost[i] > 0.0f ? 1.0f : 0.0f;
