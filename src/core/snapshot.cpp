@@ -4,6 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "src/core/binary_container.hpp"
 #include "src/core/env_buffer_fields.hpp"
 
 namespace atacom {
@@ -45,64 +46,38 @@ void SnapshotWriter::close_section() {
   open_ = false;
 }
 
+namespace {
+// The container's magic of a snapshot: "SNAP" and the env's tag.
+std::string snapshot_magic(uint32_t env_tag) {
+  std::string m(kContainerMagicBytes, '\0');
+  std::memcpy(m.data(), &kSnapshotMagic, 4);
+  std::memcpy(m.data() + 4, &env_tag, 4);
+  return m;
+}
+}  // namespace
+
 void SnapshotWriter::finish(std::ostream& out) {
   close_section();
-  std::ostringstream head;
-  bin::write_tag(head, kSnapshotMagic);
-  bin::write_tag(head, env_tag_);
-  bin::write_pod<uint32_t>(head, kSnapshotVersion);
-  bin::write_pod<uint64_t>(head, body_.size());
-  const std::string h = head.str();
-  const uint64_t sum = bin::fnv1a(body_.data(), body_.size(), bin::fnv1a(h.data(), h.size()));
-  out.write(h.data(), std::streamsize(h.size()));
-  out.write(body_.data(), std::streamsize(body_.size()));
-  bin::write_pod(out, sum);
+  ContainerWriter c(snapshot_magic(env_tag_), kSnapshotVersion);
+  c.section(body_);
+  const std::string bytes = c.finish();
+  out.write(bytes.data(), std::streamsize(bytes.size()));
   if (!out) throw std::runtime_error(env_name_ + " snapshot: write failed");
 }
 
 SnapshotReader::SnapshotReader(std::istream& in, uint32_t env_tag, std::string env_name)
     : prefix_(std::move(env_name) + " snapshot: ") {
-  auto fail = [&](const std::string& why) { throw std::runtime_error(prefix_ + why); };
-  std::string what;
-  auto pod = [&](auto v, const char* field) {
-    try {
-      return bin::read_pod<decltype(v)>(in, field);
-    } catch (const std::runtime_error&) {
-      fail(std::string("truncated (header field ") + field + ")");
-    }
-    return v;
-  };
-  const uint32_t magic = pod(uint32_t{}, "magic");
-  if (magic != kSnapshotMagic) fail("not an env snapshot (magic " + snapshot_tag_name(magic) + ")");
-  const uint32_t tag = pod(uint32_t{}, "env");
-  if (tag != env_tag)
-    fail("holds env " + snapshot_tag_name(tag) + ", this env is " + snapshot_tag_name(env_tag));
-  const uint32_t version = pod(uint32_t{}, "version");
-  if (version != kSnapshotVersion)
-    fail("format version " + std::to_string(version) + ", this build reads version " +
-         std::to_string(kSnapshotVersion));
-  const uint64_t n = pod(uint64_t{}, "length");
-  // Read in bounded steps: a length the input does not back ends in
-  // "truncated", never in a huge allocation.
-  constexpr size_t kStep = size_t{16} << 20;
-  while (body_.size() < n) {
-    const size_t old = body_.size(), take = std::min<uint64_t>(kStep, n - old);
-    body_.resize(old + take);
-    in.read(body_.data() + old, std::streamsize(take));
-    if (in.gcount() != std::streamsize(take))
-      fail("truncated (" + std::to_string(old + size_t(in.gcount())) + " of " + std::to_string(n) + " body bytes)");
-  }
-  uint64_t stored = 0;
-  in.read(reinterpret_cast<char*>(&stored), sizeof stored);
-  if (in.gcount() != std::streamsize(sizeof stored)) fail("truncated (checksum missing)");
-  std::ostringstream head;
-  bin::write_tag(head, magic);
-  bin::write_tag(head, tag);
-  bin::write_pod(head, version);
-  bin::write_pod(head, n);
-  const std::string h = head.str();
-  if (bin::fnv1a(body_.data(), body_.size(), bin::fnv1a(h.data(), h.size())) != stored)
-    fail("corrupt (checksum mismatch)");
+  ContainerReader c(in, prefix_, true);
+  uint32_t magic, tag;
+  std::memcpy(&magic, c.magic().data(), 4);
+  std::memcpy(&tag, c.magic().data() + 4, 4);
+  if (magic != kSnapshotMagic) c.fail("not an env snapshot (magic " + snapshot_tag_name(magic) + ")");
+  if (tag != env_tag) c.fail("holds env " + snapshot_tag_name(tag) + ", this env is " + snapshot_tag_name(env_tag));
+  if (c.version() != kSnapshotVersion)
+    c.fail("format version " + std::to_string(c.version()) + ", this build reads version " +
+           std::to_string(kSnapshotVersion));
+  c.read({{"body"}});
+  body_ = c.take(0);
 }
 
 void SnapshotReader::close_section() {
