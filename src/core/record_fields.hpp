@@ -12,6 +12,8 @@
 //       v("late", &Foo::late, kFieldAppended);                    // see below
 //     }
 //   };
+// A visitor is called as v(name, accessor) or v(name, accessor, flags), so it
+// takes `(const char* name, const auto& acc, unsigned flags = kFieldPlain)`.
 // An accessor is a member pointer or a lambda taking the record by `auto&`;
 // field_of(r, acc) gives the member with r's constness. Field types: a
 // trivially copyable value, a std::vector of them (written with its count),
