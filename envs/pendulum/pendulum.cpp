@@ -10,6 +10,7 @@
 #include "src/core/binary_io.hpp"
 #include "src/core/record_fields.hpp"
 #include "src/core/snapshot.hpp"
+#include "src/core/config_fields.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
 #include "atacom/parallel.hpp"
@@ -40,21 +41,32 @@ static_assert(sizeof(PendulumBatch) == field_bytes<PendulumStateFields>(),
 
 PendulumModel default_pendulum_model() { return PendulumModel{}; }
 
+namespace {
+// PendulumModel's one key list (src/core/config_fields.hpp); every key is
+// optional when read (Gymnasium's constants fill the rest).
+template <class P, class V>
+void pendulum_model_fields(P& p, V& v) {
+  v.number("g", p.g, range::finite());
+  v.number("m", p.m, range::positive());
+  v.number("l", p.l, range::positive());
+  v.number("dt", p.dt, range::open_closed(0.0, 1.0));
+  v.number("max_speed", p.max_speed, range::positive());
+  v.number("max_torque", p.max_torque, range::positive());
+  v.integer("horizon", p.horizon, range::closed(1, limits::kMaxHorizon));
+}
+}  // namespace
+
 void to_json(nlohmann::json& j, const PendulumModel& p) {
-  j = nlohmann::json{{"g", p.g}, {"m", p.m}, {"l", p.l}, {"dt", p.dt}, {"max_speed", p.max_speed},
-                     {"max_torque", p.max_torque}, {"horizon", p.horizon}};
+  ConfigJsonWriter w;
+  pendulum_model_fields(p, w);
+  j = std::move(w.json());
 }
 
 void from_json(const nlohmann::json& j, PendulumModel& p) {
   ConfigReader r(j, "env");
   p = default_pendulum_model();
-  r.get("g", p.g, range::finite());
-  r.get("m", p.m, range::positive());
-  r.get("l", p.l, range::positive());
-  r.get("dt", p.dt, range::open_closed(0.0, 1.0));
-  r.get("max_speed", p.max_speed, range::positive());
-  r.get("max_torque", p.max_torque, range::positive());
-  r.get("horizon", p.horizon, range::closed(1, limits::kMaxHorizon));
+  ConfigFieldReader v(r, ConfigFieldReader::Keys::Optional);
+  pendulum_model_fields(p, v);
   r.finish();
   auto pos = [](double v) { return v > 0 && std::isfinite(v); };
   if (!std::isfinite(p.g)) throw std::invalid_argument("config: env.g must be finite");

@@ -49,12 +49,25 @@ class ConfigJsonWriter {
   nlohmann::json j_ = nlohmann::json::object();
 };
 
+// Reads every key as required, or (Keys::Optional) keeps the value already in
+// the struct for a key the JSON leaves out (a config read over its defaults).
 class ConfigFieldReader {
  public:
-  explicit ConfigFieldReader(ConfigReader& r) : r_(r) {}
-  void number(const char* key, double& x, const Range<double>& r = range::finite()) { x = r_.number(key, r); }
+  enum class Keys { Required, Optional };
+  explicit ConfigFieldReader(ConfigReader& r, Keys keys = Keys::Required) : r_(r), optional_(keys == Keys::Optional) {}
+  void number(const char* key, double& x, const Range<double>& r = range::finite()) {
+    if (optional_)
+      r_.get(key, x, r);
+    else
+      x = r_.number(key, r);
+  }
   template <class I>
-  void integer(const char* key, I& x, const Range<I>& r = range::all<I>()) { x = r_.integer<I>(key, r); }
+  void integer(const char* key, I& x, const Range<I>& r = range::all<I>()) {
+    if (optional_)
+      r_.get(key, x, r);
+    else
+      x = r_.integer<I>(key, r);
+  }
   void string(const char* key, std::string& x) { x = r_.string(key); }
   template <class T>
   void object(const char* key, T& x) { from_json(r_.at(key), x); }
@@ -68,6 +81,7 @@ class ConfigFieldReader {
 
  private:
   ConfigReader& r_;
+  bool optional_;
 };
 
 }  // namespace atacom
