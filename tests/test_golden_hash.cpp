@@ -30,6 +30,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "atacom/env_registry.hpp"
@@ -37,6 +39,7 @@
 #include "atacom/parallel.hpp"
 #include "atacom/rng.hpp"
 #include "src/core/binary_io.hpp"
+#include "src/core/env_buffer_fields.hpp"
 #include "build_kind.hpp"
 
 using namespace atacom;
@@ -110,26 +113,28 @@ uint64_t mix(uint64_t h, const std::vector<T>& v) {
   return bin::fnv1a(v.data(), v.size() * sizeof(T), h);
 }
 
+// Every field of EnvBuffers' one list (src/core/env_buffer_fields.hpp), in
+// its order, so a new buffer is hashed too, with the rule the constants were
+// recorded under: the 0/1 cost (a function of the rows and info) is not
+// hashed; its slot holds the continuous cost, which sat there before the 0/1
+// cost existed, and is not hashed again at the end.
 // drop_info: an info column left out of the hash (-1: none).
 uint64_t buffers_hash(uint64_t h, const EnvBuffers& b, int drop_info = -1) {
-  h = mix(h, b.obs);
-  h = mix(h, b.final_obs);
-  h = mix(h, b.reward);
-  h = mix(h, b.cost_continuous);  // the continuous cost's slot since before the 0/1 cost existed
-  h = mix(h, b.terminated);
-  h = mix(h, b.truncated);
-  h = mix(h, b.constraints);
-  if (drop_info < 0) {
-    h = mix(h, b.info);
-  } else {
-    const size_t ni = b.info.size() / size_t(b.N);
-    std::vector<float> kept;
-    for (size_t i = 0; i < b.info.size(); ++i)
-      if (i % ni != size_t(drop_info)) kept.push_back(b.info[i]);
-    h = mix(h, kept);
-  }
-  h = mix(h, b.episode_return);
-  h = mix(h, b.episode_length);
+  EnvBufferFields::each([&](const char* name, const auto& acc, unsigned = kFieldPlain) {
+    const std::string_view n = name;
+    if (n == "cost_continuous") return;
+    if (n == "cost") {
+      h = mix(h, b.cost_continuous);
+    } else if (n == "info" && drop_info >= 0) {
+      const size_t ni = b.info.size() / size_t(b.N);
+      std::vector<float> kept;
+      for (size_t i = 0; i < b.info.size(); ++i)
+        if (i % ni != size_t(drop_info)) kept.push_back(b.info[i]);
+      h = mix(h, kept);
+    } else {
+      h = mix(h, field_of(b, acc));
+    }
+  });
   return h;
 }
 
@@ -235,4 +240,23 @@ TEST_CASE("golden hashes: hri-upright with the pre-issue-30 keys is the hri env 
     }
     CHECK(upright.hash == g.native);
   }
+}
+
+TEST_CASE("golden hashes: the hash covers every buffer of EnvBuffers' field list but the 0/1 cost", "[golden]") {
+  auto env = make_env({.name = "nav", .num_envs = 2});
+  const EnvBuffers base = env->buffers();
+  const uint64_t h0 = buffers_hash(0, base);
+  EnvBufferFields::each([&](const char* name, const auto& acc, unsigned = kFieldPlain) {
+    INFO(name);
+    EnvBuffers b = base;
+    auto& v = field_of(b, acc);
+    REQUIRE(!v.empty());
+    using T = typename std::decay_t<decltype(v)>::value_type;
+    v.back() = static_cast<T>(v.back() + 1);
+    // The 0/1 cost is a function of the rows and info (tests/test_env_cost.cpp).
+    if (std::string_view(name) == "cost")
+      CHECK(buffers_hash(0, b) == h0);
+    else
+      CHECK(buffers_hash(0, b) != h0);
+  });
 }

@@ -158,7 +158,9 @@ TEST_CASE("redsdf weight file round trip and clear errors for bad files", "[reds
   write(flipped);
   CHECK_THROWS_WITH(load_redsdf(dir.string()), Catch::Contains("checksum mismatch"));
   write(bytes.substr(0, bytes.size() - 9));
-  CHECK_THROWS_WITH(load_redsdf(dir.string()), Catch::Contains("checksum mismatch"));
+  CHECK_THROWS_WITH(load_redsdf(dir.string()), Catch::Contains("truncated"));
+  write(bytes + "x");
+  CHECK_THROWS_WITH(load_redsdf(dir.string()), Catch::Contains("longer than its header says"));
   write("not a model");
   CHECK_THROWS_WITH(load_redsdf(dir.string()), Catch::Contains("not a ReDSDF weight file"));
   write(bytes);

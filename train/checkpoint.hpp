@@ -1,5 +1,6 @@
 // Checkpoint files: versioned binary with an embedded JSON manifest, written
-// atomically.
+// atomically; the one binary container (src/core/binary_container.hpp) with
+// two sections, the manifest and the payload.
 //
 // Layout: "ATACKPT\0" | u32 version | u64 manifest bytes | manifest (JSON) |
 //         u64 payload bytes | payload | u64 FNV-1a of everything before.

@@ -7,6 +7,7 @@
 
 #include "envs/nav/nav_env.hpp"
 #include "atacom/projector.hpp"
+#include "src/core/config_fields.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/env_target.hpp"
 #include "src/core/limits.hpp"
@@ -82,113 +83,75 @@ void validate(const NavConfig& c) {
           "box2d iteration counts must be >= 1");
 }
 
+namespace {
+
+// The one list of NavConfig's keys (src/core/config_fields.hpp), in the order
+// of its JSON; the env target follows it (write_env_target / read_env_target).
+template <class C, class V>
+void nav_config_fields(C& c, V& v) {
+  v.number("dt", c.dt, range::open_closed(0.0, 1.0));
+  v.integer("horizon", c.horizon, range::closed(1, limits::kMaxHorizon));
+  v.integer("block", c.block, range::closed(1, limits::kMaxEnvs));
+  v.section("room", [&](auto& s) {
+    s.number("x", c.room.x);
+    s.number("y", c.room.y);
+    s.number("wall_thickness", c.room.wall_thickness);
+    s.number("spawn_fraction", c.room.spawn_fraction);
+    s.number("min_start_separation", c.room.min_start_separation);
+  });
+  v.section("tiago", [&](auto& s) {
+    s.number("radius", c.tiago.radius);
+    s.number("v_max", c.tiago.v_max);
+    s.number("w_max", c.tiago.w_max);
+  });
+  v.section("fetch", [&](auto& s) {
+    s.number("radius", c.fetch.radius);
+    s.object("policy", c.fetch.policy);
+  });
+  v.section("reward", [&](auto& s) {
+    s.number("distance_weight", c.reward.distance_weight);
+    s.number("heading_gain", c.reward.heading_gain);
+    s.number("heading_offset", c.reward.heading_offset);
+    s.number("action_change_weight", c.reward.action_change_weight);
+    s.number("goal_radius", c.reward.goal_radius);
+    s.number("goal_bonus", c.reward.goal_bonus);
+    s.number("collision_reward", c.reward.collision_reward);
+  });
+  v.section("constraints", [&](auto& s) {
+    s.number("wall_margin", c.constraints.wall_margin);
+    s.number("fetch_margin", c.constraints.fetch_margin);
+    s.number("wall_lookahead", c.constraints.wall_lookahead);
+    s.number("fetch_lookahead", c.constraints.fetch_lookahead);
+    s.number("fetch_sweep", c.constraints.fetch_sweep);
+    s.number("wall_buffer", c.constraints.wall_buffer);
+    s.string("slack", c.constraints.slack);
+    s.string("basis", c.constraints.basis);
+    s.number("wall_beta", c.constraints.wall_beta);
+    s.number("wall_tol", c.constraints.wall_tol);
+    s.number("fetch_beta", c.constraints.fetch_beta);
+    s.number("fetch_tol", c.constraints.fetch_tol);
+    s.number("violation_tolerance", c.constraints.violation_tolerance);
+  });
+  v.section("box2d", [&](auto& s) {
+    s.integer("velocity_iterations", c.box2d.velocity_iterations, range::closed(1, 1000));
+    s.integer("position_iterations", c.box2d.position_iterations, range::closed(1, 1000));
+  });
+}
+
+}  // namespace
+
 void to_json(nlohmann::json& j, const NavConfig& c) {
-  nlohmann::json policy;
-  to_json(policy, c.fetch.policy);
-  j = nlohmann::json{
-      {"dt", c.dt},
-      {"horizon", c.horizon},
-      {"block", c.block},
-      {"room",
-       {{"x", c.room.x},
-        {"y", c.room.y},
-        {"wall_thickness", c.room.wall_thickness},
-        {"spawn_fraction", c.room.spawn_fraction},
-        {"min_start_separation", c.room.min_start_separation}}},
-      {"tiago", {{"radius", c.tiago.radius}, {"v_max", c.tiago.v_max}, {"w_max", c.tiago.w_max}}},
-      {"fetch", {{"radius", c.fetch.radius}, {"policy", policy}}},
-      {"reward",
-       {{"distance_weight", c.reward.distance_weight},
-        {"heading_gain", c.reward.heading_gain},
-        {"heading_offset", c.reward.heading_offset},
-        {"action_change_weight", c.reward.action_change_weight},
-        {"goal_radius", c.reward.goal_radius},
-        {"goal_bonus", c.reward.goal_bonus},
-        {"collision_reward", c.reward.collision_reward}}},
-      {"constraints",
-       {{"wall_margin", c.constraints.wall_margin},
-        {"fetch_margin", c.constraints.fetch_margin},
-        {"wall_lookahead", c.constraints.wall_lookahead},
-        {"fetch_lookahead", c.constraints.fetch_lookahead},
-        {"fetch_sweep", c.constraints.fetch_sweep},
-        {"wall_buffer", c.constraints.wall_buffer},
-        {"slack", c.constraints.slack},
-        {"basis", c.constraints.basis},
-        {"wall_beta", c.constraints.wall_beta},
-        {"wall_tol", c.constraints.wall_tol},
-        {"fetch_beta", c.constraints.fetch_beta},
-        {"fetch_tol", c.constraints.fetch_tol},
-        {"violation_tolerance", c.constraints.violation_tolerance}}},
-      {"box2d",
-       {{"velocity_iterations", c.box2d.velocity_iterations},
-        {"position_iterations", c.box2d.position_iterations}}},
-  };
+  ConfigJsonWriter w;
+  nav_config_fields(c, w);
+  j = std::move(w.json());
   write_env_target(j, c.target);
 }
 
 void from_json(const nlohmann::json& j, NavConfig& out) {
-  using Reader = ConfigReader;
   NavConfig c;
-  Reader r(j, "env");
-  c.dt = r.number("dt", range::open_closed(0.0, 1.0));
-  c.horizon = r.integer("horizon", range::closed(1, limits::kMaxHorizon));
-  c.block = r.integer("block", range::closed(1, limits::kMaxEnvs));
-  {
-    Reader s(r.at("room"), r.path("room"));
-    c.room.x = s.number("x");
-    c.room.y = s.number("y");
-    c.room.wall_thickness = s.number("wall_thickness");
-    c.room.spawn_fraction = s.number("spawn_fraction");
-    c.room.min_start_separation = s.number("min_start_separation");
-    s.finish();
-  }
-  {
-    Reader s(r.at("tiago"), r.path("tiago"));
-    c.tiago.radius = s.number("radius");
-    c.tiago.v_max = s.number("v_max");
-    c.tiago.w_max = s.number("w_max");
-    s.finish();
-  }
-  {
-    Reader s(r.at("fetch"), r.path("fetch"));
-    c.fetch.radius = s.number("radius");
-    from_json(s.at("policy"), c.fetch.policy);
-    s.finish();
-  }
-  {
-    Reader s(r.at("reward"), r.path("reward"));
-    c.reward.distance_weight = s.number("distance_weight");
-    c.reward.heading_gain = s.number("heading_gain");
-    c.reward.heading_offset = s.number("heading_offset");
-    c.reward.action_change_weight = s.number("action_change_weight");
-    c.reward.goal_radius = s.number("goal_radius");
-    c.reward.goal_bonus = s.number("goal_bonus");
-    c.reward.collision_reward = s.number("collision_reward");
-    s.finish();
-  }
-  {
-    Reader s(r.at("constraints"), r.path("constraints"));
-    c.constraints.wall_margin = s.number("wall_margin");
-    c.constraints.fetch_margin = s.number("fetch_margin");
-    c.constraints.wall_lookahead = s.number("wall_lookahead");
-    c.constraints.fetch_lookahead = s.number("fetch_lookahead");
-    c.constraints.fetch_sweep = s.number("fetch_sweep");
-    c.constraints.wall_buffer = s.number("wall_buffer");
-    c.constraints.slack = s.string("slack");
-    c.constraints.basis = s.string("basis");
-    c.constraints.wall_beta = s.number("wall_beta");
-    c.constraints.wall_tol = s.number("wall_tol");
-    c.constraints.fetch_beta = s.number("fetch_beta");
-    c.constraints.fetch_tol = s.number("fetch_tol");
-    c.constraints.violation_tolerance = s.number("violation_tolerance");
-    s.finish();
-  }
-  {
-    Reader s(r.at("box2d"), r.path("box2d"));
-    c.box2d.velocity_iterations = s.integer("velocity_iterations", range::closed(1, 1000));
-    c.box2d.position_iterations = s.integer("position_iterations", range::closed(1, 1000));
-    s.finish();
-  }
+  ConfigReader r(j, "env");
+  ConfigFieldReader v(r);
+  nav_config_fields(c, v);
   c.target = read_env_target(r);
   r.finish();
   validate(c);

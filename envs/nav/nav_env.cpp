@@ -11,6 +11,7 @@
 
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
+#include "envs/nav/nav_batch_fields.hpp"
 #include "src/core/snapshot.hpp"
 
 namespace atacom {
@@ -18,7 +19,6 @@ namespace atacom {
 namespace {
 
 constexpr uint32_t kTagNav = snapshot_tag("NAV ");
-constexpr uint32_t kTagNavState = snapshot_tag("NAVS");
 
 int checked_num_envs(int num_envs) {
   if (num_envs < 1) throw std::invalid_argument("NavEnv: number of envs must be >= 1");
@@ -93,25 +93,14 @@ void NavEnv::constraint_model(ProjectorBatch& pb, int begin, int end) const {
 // ---------------------------------------------------------------- snapshots
 
 // Snapshot (src/core/snapshot.hpp): HEAD, NAVS (the batch and its
-// streams), BUFS; read into copies first so a refused stream leaves the env
-// untouched.
+// streams, envs/nav/nav_batch_fields.hpp), BUFS; read into copies first so
+// a refused stream leaves the env untouched.
 void NavEnv::save_state(std::ostream& out) const {
   nlohmann::json j;
   to_json(j, model_.config);
   SnapshotWriter w(kTagNav, "nav");
   write_head_section(w, st_.N, snapshot_fingerprint(j.dump()));
-  std::ostream& s = w.section(kTagNavState);
-  bin::write_vec(s, st_.tiago);
-  bin::write_vec(s, st_.tiago_vel);
-  bin::write_vec(s, st_.fetch);
-  bin::write_vec(s, st_.fetch_vel);
-  bin::write_vec(s, st_.fetch_cmd);
-  bin::write_vec(s, st_.goal);
-  bin::write_vec(s, st_.fetch_goal);
-  bin::write_vec(s, st_.prev_action);
-  bin::write_vec(s, st_.t);
-  bin::write_vec(s, st_.ret);
-  for (const Rng& r : st_.rng) bin::write_rng(s, r);
+  write_fields<NavStateFields>(w.section(NavStateFields::kTag), st_);
   write_buffers_section(w, buffers_);
   w.finish(out);
 }
@@ -124,19 +113,7 @@ void NavEnv::load_state(std::istream& in) {
   read_head_section(r, N, snapshot_fingerprint(j.dump()));
   NavBatch s;
   s.resize(N);
-  std::istream& sec = r.section(kTagNavState, "state");
-  auto get = [&](auto& v, const char* what) { bin::read_vec_sized(sec, v, what); };
-  get(s.tiago, "tiago");
-  get(s.tiago_vel, "tiago_vel");
-  get(s.fetch, "fetch");
-  get(s.fetch_vel, "fetch_vel");
-  get(s.fetch_cmd, "fetch_cmd");
-  get(s.goal, "goal");
-  get(s.fetch_goal, "fetch_goal");
-  get(s.prev_action, "prev_action");
-  get(s.t, "t");
-  get(s.ret, "return");
-  for (Rng& x : s.rng) bin::read_rng(sec, x, "rng");
+  read_fields<NavStateFields>(r.section(NavStateFields::kTag, NavStateFields::kName), s);
   EnvBuffers b = buffers_;
   read_buffers_section(r, b);
   r.finish();

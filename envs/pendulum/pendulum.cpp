@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "src/core/binary_io.hpp"
+#include "src/core/record_fields.hpp"
 #include "src/core/snapshot.hpp"
+#include "src/core/config_fields.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/limits.hpp"
 #include "atacom/parallel.hpp"
@@ -20,25 +22,51 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr uint32_t kTagPendulum = snapshot_tag("PEND");
 constexpr uint32_t kTagPendulumState = snapshot_tag("PSTA");
 constexpr int kInfoAbsTheta = 0, kInfoNonfinite = 1;
+
+// PendulumBatch's one field list, in the order of the PSTA section.
+struct PendulumStateFields {
+  using Record = PendulumBatch;
+  template <class V>
+  static constexpr void each(V&& v) {
+    v("theta", &PendulumBatch::theta);
+    v("theta_dot", &PendulumBatch::theta_dot);
+    v("t", &PendulumBatch::t);
+    v("return", &PendulumBatch::ret);
+    v("rng", &PendulumBatch::rng);
+  }
+};
+static_assert(sizeof(PendulumBatch) == field_bytes<PendulumStateFields>(),
+              "PendulumBatch has a member PendulumStateFields does not list");
 }  // namespace
 
 PendulumModel default_pendulum_model() { return PendulumModel{}; }
 
+namespace {
+// PendulumModel's one key list (src/core/config_fields.hpp); every key is
+// optional when read (Gymnasium's constants fill the rest).
+template <class P, class V>
+void pendulum_model_fields(P& p, V& v) {
+  v.number("g", p.g, range::finite());
+  v.number("m", p.m, range::positive());
+  v.number("l", p.l, range::positive());
+  v.number("dt", p.dt, range::open_closed(0.0, 1.0));
+  v.number("max_speed", p.max_speed, range::positive());
+  v.number("max_torque", p.max_torque, range::positive());
+  v.integer("horizon", p.horizon, range::closed(1, limits::kMaxHorizon));
+}
+}  // namespace
+
 void to_json(nlohmann::json& j, const PendulumModel& p) {
-  j = nlohmann::json{{"g", p.g}, {"m", p.m}, {"l", p.l}, {"dt", p.dt}, {"max_speed", p.max_speed},
-                     {"max_torque", p.max_torque}, {"horizon", p.horizon}};
+  ConfigJsonWriter w;
+  pendulum_model_fields(p, w);
+  j = std::move(w.json());
 }
 
 void from_json(const nlohmann::json& j, PendulumModel& p) {
   ConfigReader r(j, "env");
   p = default_pendulum_model();
-  r.get("g", p.g, range::finite());
-  r.get("m", p.m, range::positive());
-  r.get("l", p.l, range::positive());
-  r.get("dt", p.dt, range::open_closed(0.0, 1.0));
-  r.get("max_speed", p.max_speed, range::positive());
-  r.get("max_torque", p.max_torque, range::positive());
-  r.get("horizon", p.horizon, range::closed(1, limits::kMaxHorizon));
+  ConfigFieldReader v(r, ConfigFieldReader::Keys::Optional);
+  pendulum_model_fields(p, v);
   r.finish();
   auto pos = [](double v) { return v > 0 && std::isfinite(v); };
   if (!std::isfinite(p.g)) throw std::invalid_argument("config: env.g must be finite");
@@ -67,31 +95,31 @@ PendulumEnv::PendulumEnv(const PendulumModel& model, int num_envs) : model_(mode
   spec_.info_reduce = {InfoReduce::Last, InfoReduce::Sum};
   buffers_.resize(spec_, num_envs);
   const size_t n = size_t(num_envs);
-  theta_.assign(n, 0.0);
-  theta_dot_.assign(n, 0.0);
-  t_.assign(n, 0);
-  ret_.assign(n, 0.0);
-  rng_.assign(n, Rng());
+  st_.theta.assign(n, 0.0);
+  st_.theta_dot.assign(n, 0.0);
+  st_.t.assign(n, 0);
+  st_.ret.assign(n, 0.0);
+  st_.rng.assign(n, Rng());
   seed(0);
 }
 
 void PendulumEnv::write_obs(int i, float* obs) const {
   float* o = obs + size_t(i) * 3;
-  o[0] = float(std::cos(theta_[size_t(i)]));
-  o[1] = float(std::sin(theta_[size_t(i)]));
-  o[2] = float(theta_dot_[size_t(i)]);
+  o[0] = float(std::cos(st_.theta[size_t(i)]));
+  o[1] = float(std::sin(st_.theta[size_t(i)]));
+  o[2] = float(st_.theta_dot[size_t(i)]);
 }
 
 void PendulumEnv::reset_one(int i) {
-  Rng& r = rng_[size_t(i)];
-  theta_[size_t(i)] = r.uniform(-kPi, kPi);
-  theta_dot_[size_t(i)] = r.uniform(-1.0, 1.0);
-  t_[size_t(i)] = 0;
-  ret_[size_t(i)] = 0.0;
+  Rng& r = st_.rng[size_t(i)];
+  st_.theta[size_t(i)] = r.uniform(-kPi, kPi);
+  st_.theta_dot[size_t(i)] = r.uniform(-1.0, 1.0);
+  st_.t[size_t(i)] = 0;
+  st_.ret[size_t(i)] = 0.0;
 }
 
 void PendulumEnv::seed(uint64_t s) {
-  for (int i = 0; i < num_envs(); ++i) rng_[size_t(i)].reseed(s, uint64_t(i));
+  for (int i = 0; i < num_envs(); ++i) st_.rng[size_t(i)].reseed(s, uint64_t(i));
   reset(nullptr);
 }
 
@@ -120,26 +148,26 @@ void PendulumEnv::step(const double* actions) {
       if (bad) a = 0.0;
       a = std::min(std::max(a, -1.0), 1.0);
       const double u = p.max_torque * a;
-      const double th = theta_[s], thdot = theta_dot_[s];
+      const double th = st_.theta[s], thdot = st_.theta_dot[s];
       const double thn = angle_normalize(th);
       const double costs = thn * thn + 0.1 * thdot * thdot + 0.001 * u * u;
       double newthdot = thdot + (3.0 * p.g / (2.0 * p.l) * std::sin(th) + 3.0 / (p.m * p.l * p.l) * u) * p.dt;
       newthdot = std::min(std::max(newthdot, -p.max_speed), p.max_speed);
-      theta_[s] = th + newthdot * p.dt;
-      theta_dot_[s] = newthdot;
+      st_.theta[s] = th + newthdot * p.dt;
+      st_.theta_dot[s] = newthdot;
       const double reward = -costs;
-      ret_[s] += reward;
-      t_[s] += 1;
+      st_.ret[s] += reward;
+      st_.t[s] += 1;
       b.reward[s] = float(reward);
       b.cost[s] = b.cost_continuous[s] = 0.0f;
       b.terminated[s] = 0;
-      b.truncated[s] = t_[s] >= p.horizon ? 1 : 0;
-      b.info[s * ninfo + kInfoAbsTheta] = float(std::abs(angle_normalize(theta_[s])));
+      b.truncated[s] = st_.t[s] >= p.horizon ? 1 : 0;
+      b.info[s * ninfo + kInfoAbsTheta] = float(std::abs(angle_normalize(st_.theta[s])));
       b.info[s * ninfo + kInfoNonfinite] = bad ? 1.0f : 0.0f;
       write_obs(i, b.final_obs.data());
       if (b.truncated[s]) {
-        b.episode_return[s] = ret_[s];
-        b.episode_length[s] = t_[s];
+        b.episode_return[s] = st_.ret[s];
+        b.episode_length[s] = st_.t[s];
         reset_one(i);  // same-step autoreset: obs starts the next episode
         write_obs(i, b.obs.data());
       } else {
@@ -156,12 +184,7 @@ void PendulumEnv::save_state(std::ostream& out) const {
   to_json(j, model_);
   SnapshotWriter w(kTagPendulum, "pendulum");
   write_head_section(w, num_envs(), snapshot_fingerprint(j.dump()));
-  std::ostream& s = w.section(kTagPendulumState);
-  bin::write_vec(s, theta_);
-  bin::write_vec(s, theta_dot_);
-  bin::write_vec(s, t_);
-  bin::write_vec(s, ret_);
-  for (const Rng& r : rng_) bin::write_rng(s, r);
+  write_fields<PendulumStateFields>(w.section(kTagPendulumState), st_);
   write_buffers_section(w, buffers_);
   w.finish(out);
 }
@@ -170,25 +193,13 @@ void PendulumEnv::load_state(std::istream& in) {
   nlohmann::json j;
   to_json(j, model_);
   SnapshotReader r(in, kTagPendulum, "pendulum");
-  const int n = num_envs();
-  read_head_section(r, n, snapshot_fingerprint(j.dump()));
-  std::vector<double> theta, theta_dot, ret;
-  std::vector<int32_t> t;
-  std::vector<Rng> rng = rng_;
-  std::istream& s = r.section(kTagPendulumState, "state");
-  bin::read_vec(s, theta, "pendulum.theta", n);
-  bin::read_vec(s, theta_dot, "pendulum.theta_dot", n);
-  bin::read_vec(s, t, "pendulum.t", n);
-  bin::read_vec(s, ret, "pendulum.return", n);
-  for (Rng& x : rng) bin::read_rng(s, x, "pendulum.rng");
+  read_head_section(r, num_envs(), snapshot_fingerprint(j.dump()));
+  PendulumBatch s = st_;  // same sizes; every array is checked against them
+  read_fields<PendulumStateFields>(r.section(kTagPendulumState, "state"), s, "pendulum.");
   EnvBuffers b = buffers_;
   read_buffers_section(r, b);
   r.finish();
-  theta_ = std::move(theta);
-  theta_dot_ = std::move(theta_dot);
-  t_ = std::move(t);
-  ret_ = std::move(ret);
-  rng_ = std::move(rng);
+  st_ = std::move(s);
   buffers_.copy_values_from(b);
 }
 

@@ -34,6 +34,16 @@ void from_json(const nlohmann::json& j, PendulumModel& p);  // unknown keys and 
 // ((x + pi) mod 2 pi) - pi with a floor modulo, as Gymnasium's angle_normalize.
 double angle_normalize(double x);
 
+// Per-env state, structure of arrays; written by reset and step. Its field
+// list (the snapshot's PSTA section) is in pendulum.cpp.
+struct PendulumBatch {
+  std::vector<double> theta;      // (N) angle, 0 = upright; not wrapped
+  std::vector<double> theta_dot;  // (N) angular velocity
+  std::vector<int32_t> t;         // (N) steps into the current episode
+  std::vector<double> ret;        // (N) return of the current episode so far
+  std::vector<Rng> rng;           // (N) per-env streams keyed (seed, env id)
+};
+
 class PendulumEnv final : public BatchEnv {
  public:
   // info columns: "abs_theta" (|theta| after the step, reduced Last) and
@@ -48,19 +58,15 @@ class PendulumEnv final : public BatchEnv {
   void load_state(std::istream& in) override;
 
   const PendulumModel& model() const { return model_; }
-  double theta(int i) const { return theta_[size_t(i)]; }
-  double theta_dot(int i) const { return theta_dot_[size_t(i)]; }
+  double theta(int i) const { return st_.theta[size_t(i)]; }
+  double theta_dot(int i) const { return st_.theta_dot[size_t(i)]; }
 
  private:
   void reset_one(int i);
   void write_obs(int i, float* obs) const;
   PendulumModel model_;
   EnvSpec spec_;
-  std::vector<double> theta_;      // (N) angle, 0 = upright; not wrapped
-  std::vector<double> theta_dot_;  // (N) angular velocity
-  std::vector<int32_t> t_;         // (N) steps into the current episode
-  std::vector<double> ret_;        // (N) return of the current episode so far
-  std::vector<Rng> rng_;           // (N) per-env streams keyed (seed, env id)
+  PendulumBatch st_;
 };
 
 EnvEntry pendulum_env_entry();

@@ -1,7 +1,6 @@
 #include "atacom/env.hpp"
 
-#include <algorithm>
-#include <stdexcept>
+#include "src/core/env_buffer_fields.hpp"
 
 namespace atacom {
 
@@ -21,22 +20,6 @@ void EnvBuffers::resize(const EnvSpec& spec, int n) {
   episode_length.assign(sN, 0);
 }
 
-void EnvBuffers::copy_values_from(const EnvBuffers& from) {
-  auto copy = [](const auto& src, auto& dst) {
-    if (src.size() != dst.size()) throw std::logic_error("EnvBuffers::copy_values_from: shapes differ");
-    std::copy(src.begin(), src.end(), dst.begin());
-  };
-  copy(from.obs, obs);
-  copy(from.final_obs, final_obs);
-  copy(from.reward, reward);
-  copy(from.cost, cost);
-  copy(from.cost_continuous, cost_continuous);
-  copy(from.terminated, terminated);
-  copy(from.truncated, truncated);
-  copy(from.constraints, constraints);
-  copy(from.info, info);
-  copy(from.episode_return, episode_return);
-  copy(from.episode_length, episode_length);
-}
+void EnvBuffers::copy_values_from(const EnvBuffers& from) { copy_field_values<EnvBufferFields>(from, *this); }
 
 }  // namespace atacom

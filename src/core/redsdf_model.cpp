@@ -4,11 +4,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include "atacom/rng.hpp"
-#include "src/core/binary_io.hpp"
+#include "src/core/binary_container.hpp"
 #include "src/core/config_json.hpp"
 #include "src/core/fs_util.hpp"
 
@@ -108,15 +108,13 @@ void save_redsdf(const RedsdfModel& m, const std::string& dir) {
   man["arch"] = m.arch;
   man["num_params"] = m.layout.num_params;
   man["format"] = "atacom redsdf v1";
-  const std::string js = man.dump();
-  std::ostringstream out;
-  out.write(kMagic, sizeof(kMagic));
-  bin::write_pod<uint64_t>(out, js.size());
-  out.write(js.data(), std::streamsize(js.size()));
-  bin::write_vec(out, m.params);
-  std::string body = out.str();
-  const uint64_t sum = bin::fnv1a(body.data(), body.size());
-  body.append(reinterpret_cast<const char*>(&sum), sizeof(sum));
+  ContainerWriter c(std::string_view(kMagic, sizeof kMagic), std::nullopt);
+  c.section(man.dump());
+  c.section(std::string_view(reinterpret_cast<const char*>(m.params.data()), m.params.size() * sizeof(float)),
+            sizeof(float));
+  const std::string body = c.finish();
+  uint64_t sum = 0;
+  std::memcpy(&sum, body.data() + body.size() - sizeof(sum), sizeof(sum));
   std::filesystem::create_directories(dir);
   write_file_atomic(dir + "/redsdf.bin", body);
   man["checksum_fnv1a"] = [&] {
@@ -134,30 +132,24 @@ RedsdfModel load_redsdf(const std::string& dir_or_file, const std::string& expec
   };
   std::ifstream f(path, std::ios::binary);
   if (!f) return fail("cannot be opened (missing? train one with `atacom sdf-train`)");
-  std::string body((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (body.size() < sizeof(kMagic) + 16 || body.compare(0, sizeof(kMagic), kMagic, sizeof(kMagic)) != 0)
-    return fail("not a ReDSDF weight file (bad magic or too short)");
-  uint64_t sum = 0;
-  std::memcpy(&sum, body.data() + body.size() - sizeof(sum), sizeof(sum));
-  body.resize(body.size() - sizeof(sum));
-  if (bin::fnv1a(body.data(), body.size()) != sum) return fail("checksum mismatch (corrupted or truncated)");
+  ContainerReader c(f, "learned SDF file " + path + ": ", false);
+  if (c.magic() != std::string_view(kMagic, sizeof kMagic)) return fail("not a ReDSDF weight file (bad magic)");
+  c.read({{"manifest"}, {"parameters", sizeof(float)}});
+  c.expect_end();
   RedsdfModel m;
   try {
-    std::istringstream in(body);
-    in.ignore(sizeof(kMagic));
-    const uint64_t n = bin::read_pod<uint64_t>(in, "manifest length");
-    if (n > body.size()) return fail("manifest length is implausible");
-    std::string js(size_t(n), '\0');
-    in.read(js.data(), std::streamsize(n));
-    m.manifest = parse_json_strict(js, "manifest");
+    m.manifest = parse_json_strict(c.section(0), "manifest");
     m.arch = m.manifest.at("arch").get<RedsdfArch>();
     m.layout = RedsdfLayout(m.arch);
-    bin::read_vec(in, m.params, "parameters", int64_t(m.layout.num_params));
-  } catch (const std::runtime_error& e) {
-    return fail(e.what());
   } catch (const std::exception& e) {
     return fail(std::string("inconsistent manifest: ") + e.what());
   }
+  const std::string& p = c.section(1);
+  if (p.size() != m.layout.num_params * sizeof(float))
+    return fail("holds " + std::to_string(p.size() / sizeof(float)) + " parameters, its architecture has " +
+                std::to_string(m.layout.num_params));
+  m.params.resize(m.layout.num_params);
+  std::memcpy(m.params.data(), p.data(), p.size());
   for (float v : m.params)
     if (!std::isfinite(v)) return fail("non-finite parameter");
   if (!expected_object.empty() && m.object() != expected_object)

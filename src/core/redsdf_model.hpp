@@ -14,9 +14,10 @@
 // layer), side (two layers): the layout the training tape and the batched
 // kernel (kernels/redsdf_batch.hpp) both read.
 //
-// Weight file DIR/redsdf.bin: magic, the manifest JSON (object, architecture,
-// centre, data seed, metrics, training command), the parameters, and an
-// FNV-1a checksum of everything before it. DIR/manifest.json is a readable
+// Weight file DIR/redsdf.bin, the one binary container
+// (src/core/binary_container.hpp) with magic "ATRDSDF1" (no version field)
+// and two sections: the manifest JSON (object, architecture, centre, data
+// seed, metrics, training command) and the float parameters. DIR/manifest.json is a readable
 // copy; the binary alone is authoritative. Both are written atomically.
 #pragma once
 #include <string>

@@ -4,6 +4,9 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "src/core/binary_container.hpp"
+#include "src/core/env_buffer_fields.hpp"
+
 namespace atacom {
 
 std::string snapshot_tag_name(uint32_t tag) {
@@ -43,64 +46,38 @@ void SnapshotWriter::close_section() {
   open_ = false;
 }
 
+namespace {
+// The container's magic of a snapshot: "SNAP" and the env's tag.
+std::string snapshot_magic(uint32_t env_tag) {
+  std::string m(kContainerMagicBytes, '\0');
+  std::memcpy(m.data(), &kSnapshotMagic, 4);
+  std::memcpy(m.data() + 4, &env_tag, 4);
+  return m;
+}
+}  // namespace
+
 void SnapshotWriter::finish(std::ostream& out) {
   close_section();
-  std::ostringstream head;
-  bin::write_tag(head, kSnapshotMagic);
-  bin::write_tag(head, env_tag_);
-  bin::write_pod<uint32_t>(head, kSnapshotVersion);
-  bin::write_pod<uint64_t>(head, body_.size());
-  const std::string h = head.str();
-  const uint64_t sum = bin::fnv1a(body_.data(), body_.size(), bin::fnv1a(h.data(), h.size()));
-  out.write(h.data(), std::streamsize(h.size()));
-  out.write(body_.data(), std::streamsize(body_.size()));
-  bin::write_pod(out, sum);
+  ContainerWriter c(snapshot_magic(env_tag_), kSnapshotVersion);
+  c.section(body_);
+  const std::string bytes = c.finish();
+  out.write(bytes.data(), std::streamsize(bytes.size()));
   if (!out) throw std::runtime_error(env_name_ + " snapshot: write failed");
 }
 
 SnapshotReader::SnapshotReader(std::istream& in, uint32_t env_tag, std::string env_name)
     : prefix_(std::move(env_name) + " snapshot: ") {
-  auto fail = [&](const std::string& why) { throw std::runtime_error(prefix_ + why); };
-  std::string what;
-  auto pod = [&](auto v, const char* field) {
-    try {
-      return bin::read_pod<decltype(v)>(in, field);
-    } catch (const std::runtime_error&) {
-      fail(std::string("truncated (header field ") + field + ")");
-    }
-    return v;
-  };
-  const uint32_t magic = pod(uint32_t{}, "magic");
-  if (magic != kSnapshotMagic) fail("not an env snapshot (magic " + snapshot_tag_name(magic) + ")");
-  const uint32_t tag = pod(uint32_t{}, "env");
-  if (tag != env_tag)
-    fail("holds env " + snapshot_tag_name(tag) + ", this env is " + snapshot_tag_name(env_tag));
-  const uint32_t version = pod(uint32_t{}, "version");
-  if (version != kSnapshotVersion)
-    fail("format version " + std::to_string(version) + ", this build reads version " +
-         std::to_string(kSnapshotVersion));
-  const uint64_t n = pod(uint64_t{}, "length");
-  // Read in bounded steps: a length the input does not back ends in
-  // "truncated", never in a huge allocation.
-  constexpr size_t kStep = size_t{16} << 20;
-  while (body_.size() < n) {
-    const size_t old = body_.size(), take = std::min<uint64_t>(kStep, n - old);
-    body_.resize(old + take);
-    in.read(body_.data() + old, std::streamsize(take));
-    if (in.gcount() != std::streamsize(take))
-      fail("truncated (" + std::to_string(old + size_t(in.gcount())) + " of " + std::to_string(n) + " body bytes)");
-  }
-  uint64_t stored = 0;
-  in.read(reinterpret_cast<char*>(&stored), sizeof stored);
-  if (in.gcount() != std::streamsize(sizeof stored)) fail("truncated (checksum missing)");
-  std::ostringstream head;
-  bin::write_tag(head, magic);
-  bin::write_tag(head, tag);
-  bin::write_pod(head, version);
-  bin::write_pod(head, n);
-  const std::string h = head.str();
-  if (bin::fnv1a(body_.data(), body_.size(), bin::fnv1a(h.data(), h.size())) != stored)
-    fail("corrupt (checksum mismatch)");
+  ContainerReader c(in, prefix_, true);
+  uint32_t magic, tag;
+  std::memcpy(&magic, c.magic().data(), 4);
+  std::memcpy(&tag, c.magic().data() + 4, 4);
+  if (magic != kSnapshotMagic) c.fail("not an env snapshot (magic " + snapshot_tag_name(magic) + ")");
+  if (tag != env_tag) c.fail("holds env " + snapshot_tag_name(tag) + ", this env is " + snapshot_tag_name(env_tag));
+  if (c.version() != kSnapshotVersion)
+    c.fail("format version " + std::to_string(c.version()) + ", this build reads version " +
+           std::to_string(kSnapshotVersion));
+  c.read({{"body"}});
+  body_ = c.take(0);
 }
 
 void SnapshotReader::close_section() {
@@ -165,38 +142,13 @@ void read_head_section(SnapshotReader& r, int num_envs, uint64_t config_fingerpr
 }
 
 void write_buffers_section(SnapshotWriter& w, const EnvBuffers& b) {
-  std::ostream& s = w.section(kTagBuffers);
-  bin::write_vec(s, b.obs);
-  bin::write_vec(s, b.final_obs);
-  bin::write_vec(s, b.reward);
-  bin::write_vec(s, b.cost);
-  bin::write_vec(s, b.terminated);
-  bin::write_vec(s, b.truncated);
-  bin::write_vec(s, b.constraints);
-  bin::write_vec(s, b.info);
-  bin::write_vec(s, b.episode_return);
-  bin::write_vec(s, b.episode_length);
-  bin::write_vec(s, b.cost_continuous);
+  write_fields<EnvBufferFields>(w.section(kTagBuffers), b);
 }
 
 void read_buffers_section(SnapshotReader& r, EnvBuffers& b) {
   std::istream& s = r.section(kTagBuffers, "buffers");
-  auto get = [&](auto& v, const char* what) { bin::read_vec_sized(s, v, what); };
-  get(b.obs, "buffers.obs");
-  get(b.final_obs, "buffers.final_obs");
-  get(b.reward, "buffers.reward");
-  get(b.cost, "buffers.cost");
-  get(b.terminated, "buffers.terminated");
-  get(b.truncated, "buffers.truncated");
-  get(b.constraints, "buffers.constraints");
-  get(b.info, "buffers.info");
-  get(b.episode_return, "buffers.episode_return");
-  get(b.episode_length, "buffers.episode_length");
-  const bool more = s.peek() != std::char_traits<char>::eof();
-  s.clear();  // a peek at the end sets eofbit, which the section's size check (tellg) reads as an error
-  if (more) {
-    get(b.cost_continuous, "buffers.cost_continuous");
-  } else {  // a snapshot of an earlier build: its cost slot held the continuous cost
+  if (!read_fields<EnvBufferFields>(s, b, "buffers.")) {
+    // A snapshot of an earlier build: its cost slot held the continuous cost.
     for (size_t i = 0; i < b.cost.size(); ++i) {
       b.cost_continuous[i] = b.cost[i];
       b.cost[i] = b.cost[i] > 0.0f ? 1.0f : 0.0f;

@@ -1,8 +1,9 @@
 // The one env snapshot format (BatchEnv::save_state / load_state), for every
-// env: tagged, sized, checksummed sections built on the checkpoint's binary
-// helpers (src/core/binary_io.hpp: tags, length-prefixed vectors, FNV-1a).
+// env: tagged, sized sections in the one binary container
+// (src/core/binary_container.hpp), fields written with src/core/binary_io.hpp.
 //
-// Layout (native endian):
+// Layout (native endian): the container with magic "SNAP" + u32 env tag and
+// one section, the body:
 //   u32 "SNAP" | u32 env tag | u32 format version | u64 body bytes | body |
 //   u64 FNV-1a of everything before
 //   body = sections, each  u32 tag | u64 bytes | bytes
