@@ -91,8 +91,10 @@ const Golden kGolden[] = {
     // fields, upright starts, spills at 25 and 15 deg); hri-upright is new.
     {"hri", SafetyLayer::None, 0, 0x1b95459ff78f05e6ull},
     {"hri", SafetyLayer::Atacom, 0, 0x677aceba63a73d16ull},
-    {"hri-upright", SafetyLayer::None, 0, 0x2554e86418d5e0d7ull},
-    {"hri-upright", SafetyLayer::Atacom, 0, 0x162c82a0d4cfb297ull},
+    // hri-upright moved when its upright row went 5 deg inside the spill angle (hri.upright.margin
+    // 0 -> 0.0873 rad: the row's values, the starts it admits and ATACOM's corrections change).
+    {"hri-upright", SafetyLayer::None, 0, 0x25d4918799e0e98eull},
+    {"hri-upright", SafetyLayer::Atacom, 0, 0x09b1104c07527ecbull},
 };
 
 // The env "hri" was before issue 30 (commit 1fe7f3d): its recorded native
@@ -220,8 +222,10 @@ TEST_CASE("golden hashes: hri-upright with the pre-issue-30 keys is the hri env 
   INFO("build: " << kBuildName);
   const double pi = 3.14159265358979323846;
   const nlohmann::json analytic = {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}};
-  const nlohmann::json keys = {{"hri", {{"frames_per_step", 0.5}, {"spill_angle", 0.6981}, {"start_tilt", pi}}},
-                               {"sdf", analytic}};
+  // (hri-upright's upright margin of 5 deg is later: the env then had margin 0.)
+  const nlohmann::json keys = {
+      {"hri", {{"frames_per_step", 0.5}, {"spill_angle", 0.6981}, {"start_tilt", pi}, {"upright", {{"margin", {0.0}}}}}},
+      {"sdf", analytic}};
   // A run config of that time: the whole resolved hri section, without the keys issue 30 added.
   nlohmann::json old = nlohmann::json::parse(env_entry("hri").default_config().dump());
   for (const char* k : {"upright_row", "spill_angle_strict", "start_tilt"}) old["hri"].erase(k);

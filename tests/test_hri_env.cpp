@@ -419,6 +419,60 @@ TEST_CASE("hri: random alpha through ATACOM on held-out motion: 20x fewer human 
   CHECK(over * 10000 <= long(N) * steps);
 }
 
+// hri-upright's row holds the tilt at theta_max - margin = 25 - 5 = 20 deg;
+// its tolerance (0.02 in cosine) ends at 23.3 deg, inside the 25 deg spill
+// angle, so a spill needs the row beyond its tolerance, which ATACOM allows
+// only where the person corners the arm (no action in the box corrects every
+// row: atacom_bias_out). With margin 0, the default before, the tolerance
+// ended at 27.6 deg and random actions, which keep pushing the cup against
+// the row, spilled in nearly every episode with the row within tolerance.
+TEST_CASE("hri-upright: random alpha through ATACOM spills only where the projection is infeasible (margin 0: most episodes)",
+          "[hri][fast]") {
+  const nlohmann::json analytic = {{"human", "analytic"}, {"table", "analytic"}, {"tiago", "analytic"}};
+  struct Count {
+    double edge_deg = 0.0;  // the largest tilt a row within tolerance allows
+    long episodes = 0, spills = 0, spills_within_tolerance = 0, spills_feasible = 0;
+  };
+  auto run = [&](const nlohmann::json& cfg) {
+    Count n;
+    const nlohmann::json h = resolve_env_config("hri-upright", cfg).at("hri");
+    const double row_angle = h.at("theta_max").get<double>() - h.at("upright").at("margin")[0].get<double>();
+    const double tol = h.at("upright").at("tolerance")[0].get<double>();
+    n.edge_deg = std::acos(std::cos(row_angle) - tol) * 180.0 / M_PI;
+    const int N = 128, steps = 1000;  // two episodes per env
+    auto env = make_env({"hri-upright", N, SafetyLayer::Atacom, cfg});
+    env->seed(11);
+    const EnvSpec& s = env->spec();
+    const int ni = int(s.info_names.size()), k = s.num_constraints;
+    const int col_s = info_col(s, "spill"), col_b = info_col(s, "atacom_bias_out");
+    Rng rng(29, 0);
+    for (int t = 0; t < steps; ++t) {
+      env->step(random_actions(rng, N).data());
+      const EnvBuffers& b = env->buffers();
+      for (int i = 0; i < N; ++i) {
+        n.episodes += b.done(i);
+        if (!(b.info[size_t(i) * ni + col_s] > 0)) continue;
+        ++n.spills;
+        n.spills_within_tolerance += b.constraints[size_t(i) * k + kRowUpright] <= s.constraint_tolerance[kRowUpright];
+        n.spills_feasible += !(b.info[size_t(i) * ni + col_b] > 0);
+      }
+    }
+    return n;
+  };
+  const Count now = run({{"sdf", analytic}});
+  const Count before = run({{"sdf", analytic}, {"hri", {{"upright", {{"margin", {0.0}}}}}}});
+  INFO("margin 5 deg: tolerance edge " << now.edge_deg << " deg, " << now.spills << " spills in " << now.episodes
+       << " episodes (" << now.spills_within_tolerance << " with the row within tolerance, " << now.spills_feasible
+       << " with a feasible projection); margin 0: edge " << before.edge_deg << " deg, " << before.spills << " in "
+       << before.episodes << " (" << before.spills_within_tolerance << " within tolerance)");
+  CHECK(now.edge_deg < 25.0 - 1.0);
+  CHECK(now.spills_within_tolerance == 0);
+  CHECK(now.spills_feasible == 0);
+  CHECK(now.spills * 50 <= now.episodes);
+  CHECK(before.edge_deg > 25.0);
+  CHECK(before.spills_within_tolerance * 2 > before.episodes);
+}
+
 // The person does not avoid the robot and can corner the arm against a
 // joint limit or the table: then no action inside the box corrects every row
 // (the projector reports atacom_bias_out) and a human row can leave its

@@ -131,6 +131,18 @@ TEST_CASE("presets: PPO's tuned settings are preset cells over PPO's generic def
         CHECK(rc.learner["minibatch_size"] == 256);
         CHECK(rc.learner["rollout_steps"] == 16);  // PPO's default, not the preset's
       }
+  // hri-upright's ATACOM-PPO cell: the same at lr 3e-4 (docs/training.md, "hri-upright").
+  for (const char* preset : {"paper", "fast"}) {
+    INFO(preset << " hri-upright/atacom-ppo");
+    const RunConfig rc =
+        resolve_run_config({{"train", {{"env", "hri-upright"}, {"algo", "atacom-ppo"}, {"preset", preset}}}});
+    CHECK(rc.train.num_envs == 128);
+    CHECK(rc.learner["gamma"] == 0.98);
+    CHECK(rc.learner["epochs"] == 5);
+    CHECK(rc.learner["minibatch_size"] == 256);
+    CHECK(rc.learner["lr_actor"] == 3e-4);
+    CHECK(rc.learner["lr_critic"] == 3e-4);
+  }
   const json d = learner_entry("ppo").default_config();
   CHECK(d["gamma"] == 0.99);
   CHECK(d["epochs"] == 10);

@@ -123,7 +123,7 @@ class ArmEnv final : public ControlAffineEnv {
 nlohmann::json table_env_default_config();
 nlohmann::json shelf_env_default_config();
 nlohmann::json hri_env_default_config();
-nlohmann::json hri_upright_env_default_config();  // hri + hri.upright_row (ours, docs/envs_arm.md)
+nlohmann::json hri_upright_env_default_config();  // hri + hri.upright_row, margin 5 deg (ours, docs/envs_arm.md)
 std::unique_ptr<BatchEnv> make_table_env(const nlohmann::json& config, int num_envs);
 std::unique_ptr<BatchEnv> make_shelf_env(const nlohmann::json& config, int num_envs);
 std::unique_ptr<BatchEnv> make_hri_env(const nlohmann::json& config, int num_envs);

@@ -42,7 +42,7 @@ struct ArmRewardConfig {
 // (ours) adds a constraint row on the tilt.
 struct ArmHriConfig {
   bool upright_row = false;      // true: the cup-upright row (k = 44; hri-upright), false: no row (k = 43; the paper's)
-  double theta_max = 0.4363;     // upright row: tilt <= theta_max - upright.margin (25 deg), rad; unused without the row
+  double theta_max = 0.4363;     // upright row: tilt <= theta_max - upright.margin; 25 deg, rad; unused without the row
   // Spills (counted, never a constraint): a cup 8 cm across filled to 2 cm
   // below its rim overflows, held still, at atan(2 / 4) = 26.6 deg; 1 cm below
   // at atan(1 / 4) = 14 deg (docs/envs_arm.md). Info `spill` at spill_angle,
@@ -55,7 +55,7 @@ struct ArmHriConfig {
   double start_tilt = 0.1745;    // 10 deg, rad
   Eigen::Vector3d cup_axis{0, -1, 0};  // the grasping frame's -y: vertical in the reference's HRI start pose
   ArmRowGroup human;             // 9 rows: margin beyond the PoI's cover radius, m
-  ArmRowGroup upright;           // 1 row: margin in rad below theta_max (read and written with or without the row)
+  ArmRowGroup upright;           // 1 row: margin in rad below theta_max (hri-upright: 5 deg); read and written with or without the row
   double human_blend = 0.02;     // smooth-min k over the 16 capsules, m (error bound 15 k / 4)
   double rho_tilt = 0.5;         // reward per radian of tilt
   double frames_per_step = 1.0;  // motion frames per env step: 1 = real time (30 Hz library, 30 Hz env); the reference's 0.5 = half speed
@@ -99,7 +99,8 @@ struct ArmEnvConfig {
 };
 
 // The one default factory per task (documented in docs/envs_arm.md). HRI:
-// the paper's task; hri-upright is this plus hri.upright_row = true.
+// the paper's task; hri-upright is this plus hri.upright_row = true and an
+// upright margin of 5 deg (envs/arm/arm_registry.cpp).
 ArmEnvConfig default_arm_env_config(ArmTask task);
 void to_json(nlohmann::json& j, const ArmEnvConfig& c);
 void from_json(const nlohmann::json& j, ArmEnvConfig& c);  // unknown or missing keys rejected

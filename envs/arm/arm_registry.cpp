@@ -22,6 +22,10 @@ nlohmann::json hri_env_default_config() { return default_arm_env_config(ArmTask:
 nlohmann::json hri_upright_env_default_config() {
   ArmEnvConfig c = default_arm_env_config(ArmTask::Hri);
   c.hri.upright_row = true;
+  // The row holds the tilt 5 deg inside theta_max (the 25 deg spill angle):
+  // its tolerance (0.02 in cosine, 3.3 deg at 20 deg) then ends at 23.3 deg,
+  // so a row within tolerance never spills (docs/envs_arm.md).
+  c.hri.upright.margin[0] = 0.0873;
   return c;
 }
 
