@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // The run every input is resumed into: the corpus's checkpoints were cut from it
-// (`fuzz_checkpoint --write-seed FILE` writes one; see tests/fuzz/README.md).
+// (`fuzz_checkpoint --write-seed FILE` writes one; docs/security.md, "Fuzzing", says how the targets run).
 nlohmann::json template_config() {
   return {{"sac", {{"actor", {{"hidden", {8}}}}, {"critic", {{"hidden", {8}}}}, {"batch_size", 8},
                    {"initial_replay", 50}, {"warmup", 50}, {"replay_capacity", 300}}},
