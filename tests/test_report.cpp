@@ -353,3 +353,42 @@ TEST_CASE("report: with fewer than 3 seeds a cell says 'n = 1: no interval' in g
   while (std::getline(pcsv, line)) CHECK(line.back() == ',');
   fs::remove_all(dir);
 }
+
+TEST_CASE("report: a sweep without atacom-sac reports atacom-ppo's improvement on its baselines", "[report]") {
+  const std::string dir = (fs::temp_directory_path() / ("atacom_report_ppo_" + std::to_string(::getpid()))).string();
+  fs::remove_all(dir);
+  const SweepSpec spec = parse_sweep_spec(json::parse(R"({"envs": ["table"], "algos": ["ppo", "atacom-ppo"],
+                                                          "seeds": [0, 1, 2], "steps": 3000})"));
+  save_or_check_spec(dir, spec);
+  for (const SweepCell& c : sweep_cells(spec)) {
+    const fs::path run = fs::path(dir) / c.run_dir();
+    fs::create_directories(run);
+    const double a = c.algo == "ppo" ? 0 : 1, s = c.seed;
+    const json sm = {{"env_steps", 3000}, {"eval_return_mean", -300 + 40 * a + s}, {"eval_discounted_return_mean", -90 + a},
+                     {"final_distance", 0.9 - 0.5 * a + 0.01 * s}, {"train_terminations", 10 - 10 * a},
+                     {"avg_episode_steps", 400}, {"train_avg_episode_steps", 300}, {"train_collisions", 31 * (1 - a)},
+                     {"train_violations", 50 * (1 - a)},
+                     {"best", {{"eval_return_mean", -300 + 40 * a}, {"eval_discounted_return_mean", -90},
+                               {"final_distance", 0.9 - 0.5 * a}, {"env_steps", 1000}}}};
+    std::ofstream(run / "summary.json") << sm.dump(2);
+    std::ofstream(run / "progress.csv") << "env_steps,updates,wall_s,eval_return_mean,final_distance\n"
+                                        << "1000,0,0.1,-400,1\n3000,0,0.2,-300,0.5\n";
+  }
+  ReportOptions o;
+  o.dir = dir;
+  write_report(o);
+  const std::string md = slurp(dir + "/report/summary.md");
+  CHECK(md.find("P(atacom-ppo improves on the baseline)") != std::string::npos);
+  CHECK(md.find("atacom-sac") == std::string::npos);
+  // Every seed of atacom-ppo ends closer than every seed of ppo: P = 1 on final_distance.
+  bool seen = false;
+  for (const auto& r : read_csv(dir + "/report/prob_improvement.csv"))
+    if (r.at("metric") == "final_distance") {
+      seen = true;
+      CHECK(r.at("algo") == "atacom-ppo");
+      CHECK(r.at("baseline") == "ppo");
+      CHECK(std::stod(r.at("p_improvement")) == 1.0);
+    }
+  CHECK(seen);
+  fs::remove_all(dir);
+}

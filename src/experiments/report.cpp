@@ -21,7 +21,6 @@ namespace atacom {
 
 namespace {
 
-constexpr const char* kMain = "atacom-sac";  // the algorithm whose improvement on each baseline is reported
 constexpr size_t kMinSeeds = kMinSeedsForInterval;
 
 // "n = 1: no interval": what a table cell says instead of a statistic it cannot give.
@@ -87,6 +86,15 @@ struct Drop {
 
 // The rows of the plain metrics (censored = false) or of the censored ones,
 // whose runs that never met the target are in v as +inf (no mean or std).
+// The algorithm whose improvement on each baseline is reported: ATACOM-SAC
+// (the paper's), or ATACOM-PPO in a sweep without it; "" when neither ran.
+std::string main_algorithm(const ReportData& d) {
+  for (const char* m : {"atacom-sac", "atacom-ppo"})
+    for (const auto& a : d.algos)
+      if (a == m) return m;
+  return "";
+}
+
 std::vector<Row> table_rows(const ReportData& d, bool censored) {
   std::vector<Row> rows;
   for (const auto& env : d.envs)
@@ -115,15 +123,14 @@ std::vector<Row> table_rows(const ReportData& d, bool censored) {
 
 std::vector<Pi> improvements(const ReportData& d) {
   std::vector<Pi> out;
-  bool has_main = false;
-  for (const auto& a : d.algos) has_main = has_main || a == kMain;
-  if (!has_main) return out;
+  const std::string main = main_algorithm(d);
+  if (main.empty()) return out;
   for (const auto& env : d.envs)
     for (const auto& base : d.algos) {
-      if (base == kMain) continue;
+      if (base == main) continue;
       for (const ReportMetric& m : report_metrics()) {
         if (!m.boxplot && !m.censored) continue;
-        const std::vector<double> x = metric_values(d, env, kMain, m.key), y = metric_values(d, env, base, m.key);
+        const std::vector<double> x = metric_values(d, env, main, m.key), y = metric_values(d, env, base, m.key);
         if (x.empty() || y.empty()) continue;
         const bool enough = x.size() >= kMinSeeds && y.size() >= kMinSeeds;
         Pi p{env, m.key, base, x.size(), y.size()};
@@ -177,9 +184,14 @@ std::string methods_text(const ReportData& d) {
          std::to_string(d.opts.resamples) + " resamples of the seeds with replacement, seed " +
          std::to_string(d.opts.seed) + "; one task per cell, so stratified = within the cell; curves: " +
          std::to_string(d.opts.curve_resamples) +
-         " resamples per evaluation). P(improvement) of atacom-sac over a baseline: Mann-Whitney form, over all "
-         "seed pairs 1 if atacom-sac is better, 1/2 if equal, with a 95% percentile-bootstrap interval (both algorithms' "
-         "seeds resampled). Final-policy metrics are the last evaluation; "
+         " resamples per evaluation). " +
+         (main_algorithm(d).empty()
+              ? std::string("P(improvement): not formed (neither atacom-sac nor atacom-ppo ran). ")
+              : "P(improvement) of " + main_algorithm(d) + " over a baseline: Mann-Whitney form, over all seed pairs 1 if " +
+                    main_algorithm(d) +
+                    " is better, 1/2 if equal, with a 95% percentile-bootstrap interval (both algorithms' "
+                    "seeds resampled). ") +
+         "Final-policy metrics are the last evaluation; "
          "training metrics count over all training steps. Cost: a step costs 1 when a constraint row exceeds its "
          "stated tolerance or a collision / joint-limit event happens (Safety-Gymnasium's convention); eval_cost_mean "
          "is the final policy's cost per episode, train_cost the cost summed over training; a cost axis is "
@@ -248,7 +260,7 @@ ReportResult write_report(const ReportOptions& opts) {
   write_file_atomic(out("time_to_target.csv"), tcsv);
   std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement,p_ci_low,p_ci_high\n";
   for (const Pi& p : pis)
-    pcsv += p.env + "," + p.metric + "," + kMain + "," + p.baseline + "," + std::to_string(p.nx) + "," +
+    pcsv += p.env + "," + p.metric + "," + main_algorithm(d) + "," + p.baseline + "," + std::to_string(p.nx) + "," +
             std::to_string(p.ny) + "," + num_or_empty(p.p) + "," + num_or_empty(p.ci.low) + "," +
             num_or_empty(p.ci.high) + "\n";
   write_file_atomic(out("prob_improvement.csv"), pcsv);
@@ -345,9 +357,10 @@ ReportResult write_report(const ReportOptions& opts) {
     bool any = false;
     for (const Pi& p : pis) any = any || p.env == env;
     if (any) {
-      md << "P(atacom-sac improves on the baseline):\n\n| baseline | metric | n | P(improvement) [95% CI] |\n|---|---|---|---|\n";
-      html << "<h3>P(atacom-sac improves on the baseline)</h3><table><tr><th>baseline</th><th>metric</th>"
-              "<th>n (atacom-sac, baseline)</th><th>P(improvement) [95% CI]</th></tr>\n";
+      const std::string main = main_algorithm(d);
+      md << "P(" << main << " improves on the baseline):\n\n| baseline | metric | n | P(improvement) [95% CI] |\n|---|---|---|---|\n";
+      html << "<h3>P(" << main << " improves on the baseline)</h3><table><tr><th>baseline</th><th>metric</th>"
+              "<th>n (" << main << ", baseline)</th><th>P(improvement) [95% CI]</th></tr>\n";
       for (const Pi& p : pis) {
         if (p.env != env) continue;
         const bool enough = std::min(p.nx, p.ny) >= kMinSeeds;
