@@ -141,6 +141,9 @@ class AtacomVectorEnv(_VectorEnvBase):
         self.constraint_tolerance = _readonly(np.array(spec["constraint_tolerance"], dtype=np.float64))
         self.info_names = tuple(spec["info_names"])
         self.info_reduce = dict(zip(spec["info_names"], spec["info_reduce"]))
+        # What each column is for: "any_contact" (the env's collision count), "contact" (one kind),
+        # "episode_event" (1 per episode with it), "goal_distance" (the quality metric), "diagnostic".
+        self.info_role = dict(zip(spec["info_names"], spec["info_role"]))
         self.cost_events = tuple(spec["cost_events"])  # info columns that make a step's cost 1
         self.metadata = {"autoreset_mode": self._mode, "render_modes": []}
         self.render_mode = None

@@ -34,6 +34,18 @@ const char* reduce_name(InfoReduce r) {
   return "last";
 }
 
+// What an info column is for (include/atacom/env.hpp, InfoRole).
+const char* role_name(InfoRole r) {
+  switch (r) {
+    case InfoRole::Diagnostic: return "diagnostic";
+    case InfoRole::Contact: return "contact";
+    case InfoRole::AnyContact: return "any_contact";
+    case InfoRole::EpisodeEvent: return "episode_event";
+    case InfoRole::GoalDistance: return "goal_distance";
+  }
+  return "diagnostic";
+}
+
 class PyEnv {
  public:
   PyEnv(const std::string& name, int num_envs, const std::string& safety, const std::string& config_json) {
@@ -130,6 +142,9 @@ void bind_env(py::module_& m) {
              std::vector<std::string> reduce;
              for (InfoReduce r : s.info_reduce) reduce.push_back(reduce_name(r));
              d["info_reduce"] = reduce;
+             std::vector<std::string> role;
+             for (size_t i = 0; i < s.info_names.size(); ++i) role.push_back(role_name(s.role(i)));
+             d["info_role"] = role;
              return d;
            })
       .def(

@@ -31,6 +31,14 @@ def test_spaces_and_attributes(env):
     assert env.metadata["autoreset_mode"] == atacom.AutoresetMode.SAME_STEP
     assert env.constraint_tolerance.shape == (k,)
     assert set(env.info_reduce) == set(env.info_names)
+    assert set(env.info_role) == set(env.info_names)
+    if env.env_name != "pendulum":  # (the pendulum has no contact and no goal: only diagnostics)
+        # Exactly one column counts any contact (the runs' collision count) and one is the quality metric.
+        assert list(env.info_role.values()).count("any_contact") == 1
+        assert list(env.info_role.values()).count("goal_distance") == 1
+        assert env.info_role["collision"] == "any_contact" and env.info_role["final_distance"] == "goal_distance"
+    else:
+        assert set(env.info_role.values()) == {"diagnostic"}
     if env.env_name == "table":
         assert (d, m, k) == (16, 7, 34)
     s = env.action_space.sample()
