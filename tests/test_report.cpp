@@ -103,6 +103,26 @@ bool close(const std::string& text, double want) {
   return std::abs(got - want) <= 1e-10 * std::max(1.0, std::abs(want));
 }
 
+// The run files of a sweep whose cells are two levels: `weaker` worse than
+// every other algorithm on every metric; seed s shifts the return by s and
+// the final distance by 0.01 s (nothing at seed 0).
+void write_two_level_runs(const std::string& dir, const SweepSpec& spec, const std::string& weaker) {
+  for (const SweepCell& c : sweep_cells(spec)) {
+    const fs::path run = fs::path(dir) / c.run_dir();
+    fs::create_directories(run);
+    const double a = c.algo == weaker ? 0 : 1, s = c.seed;
+    const json sm = {{"env_steps", 3000}, {"eval_return_mean", -300 + 40 * a + s}, {"eval_discounted_return_mean", -90 + a},
+                     {"final_distance", 0.9 - 0.5 * a + 0.01 * s}, {"train_terminations", 10 - 10 * a},
+                     {"avg_episode_steps", 400}, {"train_avg_episode_steps", 300}, {"train_collisions", 31 * (1 - a)},
+                     {"train_violations", 50 * (1 - a)},
+                     {"best", {{"eval_return_mean", -300 + 40 * a}, {"eval_discounted_return_mean", -90},
+                               {"final_distance", 0.9 - 0.5 * a}, {"env_steps", 1000}}}};
+    std::ofstream(run / "summary.json") << sm.dump(2);
+    std::ofstream(run / "progress.csv") << "env_steps,updates,wall_s,eval_return_mean,final_distance\n"
+                                        << "1000,0,0.1,-400,1\n3000,0,0.2,-300,0.5\n";
+  }
+}
+
 }  // namespace
 
 TEST_CASE("report: statistics at known values", "[report]") {
@@ -312,20 +332,7 @@ TEST_CASE("report: with fewer than 3 seeds a cell says 'n = 1: no interval' in g
   const SweepSpec spec = parse_sweep_spec(json::parse(R"({"envs": ["table"], "algos": ["sac", "atacom-sac"],
                                                           "seeds": [0], "steps": 3000})"));
   save_or_check_spec(dir, spec);
-  for (const SweepCell& c : sweep_cells(spec)) {
-    const fs::path run = fs::path(dir) / c.run_dir();
-    fs::create_directories(run);
-    const double a = c.algo == "sac" ? 0 : 1;
-    const json sm = {{"env_steps", 3000}, {"eval_return_mean", -300 + 40 * a}, {"eval_discounted_return_mean", -90 + a},
-                     {"final_distance", 0.9 - 0.5 * a}, {"train_terminations", 10 - 10 * a},
-                     {"avg_episode_steps", 400}, {"train_avg_episode_steps", 300}, {"train_collisions", 31 * (1 - a)},
-                     {"train_violations", 50 * (1 - a)},
-                     {"best", {{"eval_return_mean", -300 + 40 * a}, {"eval_discounted_return_mean", -90},
-                               {"final_distance", 0.9 - 0.5 * a}, {"env_steps", 1000}}}};
-    std::ofstream(run / "summary.json") << sm.dump(2);
-    std::ofstream(run / "progress.csv") << "env_steps,updates,wall_s,eval_return_mean,final_distance\n"
-                                        << "1000,0,0.1,-400,1\n3000,0,0.2,-300,0.5\n";
-  }
+  write_two_level_runs(dir, spec, "sac");
   ReportOptions o;
   o.dir = dir;
   write_report(o);
@@ -360,20 +367,7 @@ TEST_CASE("report: a sweep without atacom-sac reports atacom-ppo's improvement o
   const SweepSpec spec = parse_sweep_spec(json::parse(R"({"envs": ["table"], "algos": ["ppo", "atacom-ppo"],
                                                           "seeds": [0, 1, 2], "steps": 3000})"));
   save_or_check_spec(dir, spec);
-  for (const SweepCell& c : sweep_cells(spec)) {
-    const fs::path run = fs::path(dir) / c.run_dir();
-    fs::create_directories(run);
-    const double a = c.algo == "ppo" ? 0 : 1, s = c.seed;
-    const json sm = {{"env_steps", 3000}, {"eval_return_mean", -300 + 40 * a + s}, {"eval_discounted_return_mean", -90 + a},
-                     {"final_distance", 0.9 - 0.5 * a + 0.01 * s}, {"train_terminations", 10 - 10 * a},
-                     {"avg_episode_steps", 400}, {"train_avg_episode_steps", 300}, {"train_collisions", 31 * (1 - a)},
-                     {"train_violations", 50 * (1 - a)},
-                     {"best", {{"eval_return_mean", -300 + 40 * a}, {"eval_discounted_return_mean", -90},
-                               {"final_distance", 0.9 - 0.5 * a}, {"env_steps", 1000}}}};
-    std::ofstream(run / "summary.json") << sm.dump(2);
-    std::ofstream(run / "progress.csv") << "env_steps,updates,wall_s,eval_return_mean,final_distance\n"
-                                        << "1000,0,0.1,-400,1\n3000,0,0.2,-300,0.5\n";
-  }
+  write_two_level_runs(dir, spec, "ppo");
   ReportOptions o;
   o.dir = dir;
   write_report(o);

@@ -175,8 +175,9 @@ void ArmModel::build_goal_library() {
       any_in = any_in || in[l];
     }
     if (!any_in) continue;
-    // The cup's tilt and the ground truth need only FK: test them before the
-    // (learned) fields, which cost far more; the same lanes pass in the end.
+    // The cup axis (and the upright row when composed) and the ground truth
+    // need only FK: test them before the (learned) fields, which cost far
+    // more. arm_constraints_lanes writes neither, so they stand for pose_ok.
     if (hri()) lanes::arm_upright_row_lanes(kc, fk, o, false);
     lanes::arm_ground_truth_lanes(kc, ql, fk, o, kLanes);
     any_in = false;
@@ -184,8 +185,6 @@ void ArmModel::build_goal_library() {
       any_in = any_in || (in[l] && !o.collision[l] && !o.joint_violation[l] && cup_upright(o, l));
     if (!any_in) continue;
     lanes::arm_constraints_lanes(kc, ql, fk, o, false);
-    if (hri()) lanes::arm_upright_row_lanes(kc, fk, o, false);  // the cup axis (and the upright row when composed)
-    lanes::arm_ground_truth_lanes(kc, ql, fk, o, kLanes);
     for (int l = 0; l < kLanes && static_cast<int>(goal_lib_q.size()) < want * kArmJoints; ++l) {
       if (!in[l] || o.collision[l] || o.joint_violation[l]) continue;
       if (pose_ok(o, l)) {

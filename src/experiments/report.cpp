@@ -179,16 +179,16 @@ std::string target_methods_text() {
 }
 
 std::string methods_text(const ReportData& d) {
+  const std::string main = main_algorithm(d);
   return "Statistics over seeds per (env, algo): mean, sample std (n - 1), median and quartiles (linear "
          "interpolation, numpy's default), IQM = 25%-trimmed mean, its 95% percentile-bootstrap interval (" +
          std::to_string(d.opts.resamples) + " resamples of the seeds with replacement, seed " +
          std::to_string(d.opts.seed) + "; one task per cell, so stratified = within the cell; curves: " +
          std::to_string(d.opts.curve_resamples) +
          " resamples per evaluation). " +
-         (main_algorithm(d).empty()
+         (main.empty()
               ? std::string("P(improvement): not formed (neither atacom-sac nor atacom-ppo ran). ")
-              : "P(improvement) of " + main_algorithm(d) + " over a baseline: Mann-Whitney form, over all seed pairs 1 if " +
-                    main_algorithm(d) +
+              : "P(improvement) of " + main + " over a baseline: Mann-Whitney form, over all seed pairs 1 if " + main +
                     " is better, 1/2 if equal, with a 95% percentile-bootstrap interval (both algorithms' "
                     "seeds resampled). ") +
          "Final-policy metrics are the last evaluation; "
@@ -259,8 +259,9 @@ ReportResult write_report(const ReportOptions& opts) {
             num(r.ci.high) + "\n";
   write_file_atomic(out("time_to_target.csv"), tcsv);
   std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement,p_ci_low,p_ci_high\n";
+  const std::string main = main_algorithm(d);
   for (const Pi& p : pis)
-    pcsv += p.env + "," + p.metric + "," + main_algorithm(d) + "," + p.baseline + "," + std::to_string(p.nx) + "," +
+    pcsv += p.env + "," + p.metric + "," + main + "," + p.baseline + "," + std::to_string(p.nx) + "," +
             std::to_string(p.ny) + "," + num_or_empty(p.p) + "," + num_or_empty(p.ci.low) + "," +
             num_or_empty(p.ci.high) + "\n";
   write_file_atomic(out("prob_improvement.csv"), pcsv);
