@@ -49,14 +49,16 @@ namespace {
 
 // Random actions through every layer of env `name`: the 0/1 cost and the
 // continuous cost against their definitions, step by step.
-void check_cost_rule(const std::string& name) {
+// Returns the steps with a cost event under the raw env.
+int64_t check_cost_rule(const std::string& name, const nlohmann::json& config = nlohmann::json::object()) {
+  int64_t raw_event_steps = 0;
   {
     const bool constrained = env_entry(name).has_constraints;
     for (SafetyLayer layer : safety_layers()) {
       if (!layer.is_none() && !constrained) continue;
       INFO(name << " under " << layer.name());
       const int N = 8;
-      auto env = make_env(EnvRequest{name, N, layer});
+      auto env = make_env(EnvRequest{name, N, layer, config});
       const EnvSpec& s = env->spec();
       const int k = s.num_constraints, ni = int(s.info_names.size());
       std::vector<int> events;
@@ -100,8 +102,10 @@ void check_cost_rule(const std::string& name) {
         CHECK(ones >= row_steps);
       }
       if (layer.is_none() && name == "shelf") CHECK(event_steps > 0);
+      if (layer.is_none()) raw_event_steps = event_steps;
     }
   }
+  return raw_event_steps;
 }
 
 }  // namespace
@@ -115,6 +119,46 @@ TEST_CASE("env cost: cost is 1 exactly when a row exceeds its tolerance or a cos
 TEST_CASE("env cost: the cost rule on HRI-Sim under every layer", "[cost][slow]") {
   check_cost_rule("hri");
   check_cost_rule("hri-upright");
+}
+
+TEST_CASE("env cost: env.hri.spill_cost makes a spill a cost event, and nothing else moves", "[cost][slow]") {
+  const nlohmann::json on = {{"hri", {{"spill_cost", true}}}};
+  CHECK(resolve_env_config("hri", nlohmann::json::object())["hri"]["spill_cost"] == false);  // off by default
+  const EnvSpec plain = make_env(EnvRequest{"hri", 1})->spec();
+  const EnvSpec with = make_env(EnvRequest{"hri", 1, SafetyLayer::None, on})->spec();
+  CHECK(plain.cost_events == std::vector<std::string>{"collision", "joint_limit_violation"});
+  CHECK(with.cost_events == std::vector<std::string>{"collision", "joint_limit_violation", "spill"});
+  const int64_t events_off = check_cost_rule("hri");
+  const int64_t events_on = check_cost_rule("hri", on);
+  CHECK(events_on > events_off);  // random actions spill in most episodes
+  // Reward, state and the other columns keep their bits: only cost differs.
+  auto a = make_env(EnvRequest{"hri", 4});
+  auto b = make_env(EnvRequest{"hri", 4, SafetyLayer::None, on});
+  a->seed(9);
+  b->seed(9);
+  Rng rng(9, 1);
+  std::vector<double> act(size_t(4) * a->spec().act_dim);
+  int64_t spill_costs = 0;
+  const int spill = info_column(with, "spill"), ni = int(with.info_names.size());
+  for (int t = 0; t < 300; ++t) {
+    for (double& x : act) x = rng.uniform(-1.0, 1.0);
+    a->step(act.data());
+    b->step(act.data());
+    const EnvBuffers &x = a->buffers(), &y = b->buffers();
+    REQUIRE(x.reward == y.reward);
+    REQUIRE(x.obs == y.obs);
+    REQUIRE(x.info == y.info);
+    REQUIRE(x.cost_continuous == y.cost_continuous);
+    for (int i = 0; i < 4; ++i) {
+      if (y.info[size_t(i) * ni + spill] != 0.0f) {
+        CHECK(y.cost[size_t(i)] == 1.0f);
+        spill_costs += x.cost[size_t(i)] == 0.0f;
+      } else {
+        CHECK(y.cost[size_t(i)] == x.cost[size_t(i)]);
+      }
+    }
+  }
+  CHECK(spill_costs > 0);
 }
 
 TEST_CASE("env cost: a snapshot of an earlier build (continuous cost in the cost slot) loads", "[cost]") {

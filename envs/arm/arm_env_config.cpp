@@ -232,6 +232,7 @@ void to_json(json& j, const ArmEnvConfig& c) {
                 {"theta_max", h.theta_max},
                 {"spill_angle", h.spill_angle},
                 {"spill_angle_strict", h.spill_angle_strict},
+                {"spill_cost", h.spill_cost},
                 {"start_tilt", h.start_tilt},
                 {"cup_axis", {h.cup_axis.x(), h.cup_axis.y(), h.cup_axis.z()}},
                 {"human", group_json(h.human)},
@@ -307,6 +308,7 @@ void from_json(const json& j, ArmEnvConfig& c) {
     x.theta_max = s.number("theta_max", range::open(0.0, 1.5));
     x.spill_angle = s.number("spill_angle", range::open(0.0, kPi));
     x.spill_angle_strict = s.number("spill_angle_strict", range::open(0.0, kPi));
+    s.get("spill_cost", x.spill_cost);  // optional: configs written before it are read unchanged
     x.start_tilt = s.number("start_tilt", range::open_closed(0.0, kPi));
     const auto a = num_array(s.at("cup_axis"), 3, s.path("cup_axis"));
     x.cup_axis = Eigen::Vector3d(a[0], a[1], a[2]);

@@ -49,6 +49,10 @@ struct ArmHriConfig {
   // `spill_<deg>` at spill_angle_strict.
   double spill_angle = 0.4363;          // 25 deg, rad
   double spill_angle_strict = 0.2618;   // 15 deg, rad (< spill_angle)
+  // true: a spill (its first step, the `spill` column) is a cost event too, so
+  // the CMDP learners (`*-lag`) can hold spills to a budget; the reward and
+  // every other bit stay the paper's.
+  bool spill_cost = false;
   // Starts (and goal configurations) hold the cup within start_tilt of
   // vertical, drawn from a library of such configurations; pi: starts uniform
   // in the joint box as TableEnv's (every orientation; the env before issue 30).

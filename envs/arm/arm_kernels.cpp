@@ -236,9 +236,9 @@ void step_group(const ArmModel& m, ArmBatch& b, EnvBuffers& B, const double* act
     std::memcpy(&B.constraints[e * kk], &b.c[e * kk], sizeof(double) * kk);
     B.reward[e] = static_cast<float>(r);
     B.cost_continuous[e] = static_cast<float>(std::max(0.0, cmax));
-    B.cost[e] = step_cost(&b.c[e * kk], m.spec.constraint_tolerance.data(), m.k, collision || o.joint_violation[l]);
     B.terminated[e] = term;
     B.truncated[e] = trunc;
+    bool cost_event = collision || o.joint_violation[l];
     float* info = &B.info[e * ni];
     info[kInfoCollision] = collision ? 1.0f : 0.0f;
     info[kInfoJointViolation] = o.joint_violation[l] ? 1.0f : 0.0f;
@@ -260,7 +260,9 @@ void step_group(const ArmModel& m, ArmBatch& b, EnvBuffers& B, const double* act
       info[kInfoMinHumanDistance] = static_cast<float>(b.min_hd[e]);
       info[kInfoTilt] = static_cast<float>(tilt);
       info[kInfoSpillStrict] = spill_strict ? 1.0f : 0.0f;
+      if (cfg.hri.spill_cost) cost_event = cost_event || spill;
     }
+    B.cost[e] = step_cost(&b.c[e * kk], m.spec.constraint_tolerance.data(), m.k, cost_event);
     float* fobs = &B.final_obs[e * d];
     arm_write_obs(m, b, ei, fobs);
     if (term || trunc) {

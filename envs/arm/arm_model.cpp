@@ -305,6 +305,7 @@ void ArmModel::build_spec() {
     }
   }
   s.cost_events = {"collision", "joint_limit_violation"};  // HRI's human contact is a collision too
+  if (hri() && config.hri.spill_cost) s.cost_events.push_back("spill");
   s.info_names = {"collision", "joint_limit_violation", "final_distance", "distance",
                   "angle",     "in_region",             "nan_action",     "reset_fallback"};
   s.info_reduce = {InfoReduce::Sum,  InfoReduce::Sum,  InfoReduce::Last, InfoReduce::Mean,
