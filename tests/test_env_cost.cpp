@@ -159,6 +159,14 @@ TEST_CASE("env cost: env.hri.spill_cost makes a spill a cost event, and nothing 
     }
   }
   CHECK(spill_costs > 0);
+  // The key enters the snapshot fingerprint only when on: an env with it
+  // refuses a snapshot of one without, and an explicit false is the default.
+  std::ostringstream saved;
+  a->save_state(saved);
+  std::istringstream into_on(saved.str()), into_off(saved.str());
+  CHECK_THROWS_WITH(b->load_state(into_on), Catch::Contains("different env config"));
+  auto off = make_env(EnvRequest{"hri", 4, SafetyLayer::None, {{"hri", {{"spill_cost", false}}}}});
+  CHECK_NOTHROW(off->load_state(into_off));
 }
 
 TEST_CASE("env cost: a snapshot of an earlier build (continuous cost in the cost slot) loads", "[cost]") {
