@@ -44,6 +44,24 @@ const EnvEntry& env_entry(const std::string& name) {
   throw std::invalid_argument("unknown env '" + printable_text(name) + "' (known: " + known + ")");
 }
 
+nlohmann::json env_config_fingerprint_form(nlohmann::json config) {
+  struct AddedKey {
+    const char* section;
+    const char* key;
+    bool implicit;  // the value the runs before the key had
+  };
+  static constexpr AddedKey kAdded[] = {
+      {"hri", "spill_cost", false},  // 2026-12-05: the spill as a cost event
+  };
+  for (const AddedKey& a : kAdded) {
+    if (!config.contains(a.section) || !config[a.section].is_object()) continue;
+    nlohmann::json& section = config[a.section];
+    const auto it = section.find(a.key);
+    if (it != section.end() && *it == a.implicit) section.erase(it);
+  }
+  return config;
+}
+
 nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::json& overrides,
                                    const std::string& path) {
   if (!overrides.is_object())

@@ -167,6 +167,14 @@ TEST_CASE("env cost: env.hri.spill_cost makes a spill a cost event, and nothing 
   CHECK_THROWS_WITH(b->load_state(into_on), Catch::Contains("different env config"));
   auto off = make_env(EnvRequest{"hri", 4, SafetyLayer::None, {{"hri", {{"spill_cost", false}}}}});
   CHECK_NOTHROW(off->load_state(into_off));
+  // A build before the key fingerprinted the config without it: its
+  // snapshots carry that fingerprint, and today's off env writes the same.
+  nlohmann::json before = resolve_env_config("hri", nlohmann::json::object());
+  before["hri"].erase("spill_cost");
+  std::istringstream head(saved.str());
+  SnapshotReader r(head, snapshot_tag("ARM "), "hri env");
+  CHECK_NOTHROW(read_head_section(r, 4, snapshot_fingerprint(before.dump())));
+  CHECK(env_config_fingerprint_form(resolve_env_config("hri", on))["hri"]["spill_cost"] == true);  // kept when on
 }
 
 TEST_CASE("env cost: a snapshot of an earlier build (continuous cost in the cost slot) loads", "[cost]") {

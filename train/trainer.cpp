@@ -152,10 +152,7 @@ uint64_t Run::config_hash() const {
   j["train"].erase("preset");  // every value it gave is explicit (and runs from before presets resume)
   j["train"].erase("stop_at_target");  // or stop at the target (where it ends, not how it trains)
   j.erase("host");            // and continue on another machine
-  // A key added after runs were written counts only away from its default,
-  // so those runs resume (the arm env's snapshot fingerprint does the same).
-  if (j.contains("env") && j["env"].contains("hri") && j["env"]["hri"].value("spill_cost", true) == false)
-    j["env"]["hri"].erase("spill_cost");
+  j["env"] = env_config_fingerprint_form(j["env"]);  // runs of builds before a newer env key resume
   const std::string s = j.dump();
   return bin::fnv1a(s.data(), s.size());
 }

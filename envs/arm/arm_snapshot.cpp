@@ -8,6 +8,7 @@
 #include <ostream>
 #include <stdexcept>
 
+#include "atacom/env_registry.hpp"
 #include "envs/arm/arm_env.hpp"
 #include "envs/arm/arm_batch_fields.hpp"
 #include "src/core/snapshot.hpp"
@@ -20,10 +21,7 @@ constexpr uint32_t kTagArm = snapshot_tag("ARM ");
 uint64_t fingerprint(const ArmEnvConfig& c) {
   nlohmann::json j;
   to_json(j, c);
-  // A key added later counts only away from its default, so snapshots of
-  // the builds before it still load (the trainer's config hash does the same).
-  if (!c.hri.spill_cost && j.contains("hri")) j["hri"].erase("spill_cost");
-  return snapshot_fingerprint(j.dump());
+  return snapshot_fingerprint(env_config_fingerprint_form(j).dump());  // snapshots of earlier builds load
 }
 std::string env_name(const ArmModel& m) { return m.spec.name + " env"; }
 }  // namespace

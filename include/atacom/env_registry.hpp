@@ -34,6 +34,12 @@ const EnvEntry& env_entry(const std::string& name);
 // Default config, merged with overrides; unknown keys throw std::invalid_argument.
 nlohmann::json resolve_env_config(const std::string& name, const nlohmann::json& overrides);
 
+// A resolved env config as fingerprints see it (the trainer's config hash,
+// the env snapshots'): keys added after runs were written are left out while
+// they hold the value those runs had implicitly, so checkpoints and snapshots
+// of earlier builds still load. envs/registry.cpp lists the keys, one line each.
+nlohmann::json env_config_fingerprint_form(nlohmann::json config);
+
 // Merge `overrides` into `base` recursively; every key of overrides must exist
 // in base (path named in the error), and JSON types must agree (numbers mix).
 nlohmann::json merge_config_strict(const nlohmann::json& base, const nlohmann::json& overrides,
