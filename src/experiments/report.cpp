@@ -13,6 +13,7 @@
 #include "src/core/fs_util.hpp"
 #include "src/core/svg.hpp"
 #include "src/experiments/report_data.hpp"
+#include "src/experiments/report_shelf_real.hpp"
 #include "src/experiments/report_stats.hpp"
 
 namespace fs = std::filesystem;
@@ -217,6 +218,96 @@ std::string seeds_note(size_t most) {
          "(3 seeds) or paper.json (25).";
 }
 
+// "0.96 [0.88, 1]" over the evaluated policies; no interval below kMinSeeds.
+std::string iqm_text(const std::vector<double>& v, const ReportData& d, const std::string& key, bool attractor) {
+  if (v.empty()) return "-";
+  if (attractor) return short_num(v[0]);
+  std::string t = short_num(iqm(v));
+  if (v.size() < kMinSeeds) return t + " (" + no_stat(v.size(), "interval") + ")";
+  const Interval ci = bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream("shelf_real/" + key));
+  return t + " [" + short_num(ci.low) + ", " + short_num(ci.high) + "]";
+}
+
+// The ShelfEnvReal section: shelf_real.csv (a row per evaluated run and
+// target, skipped runs with their reason) and a table per algorithm.
+void write_shelf_real(const ReportData& d, const std::string& csv_path, std::ostringstream& md,
+                      std::ostringstream& html) {
+  const ShelfRealSection s = shelf_real_section(d);
+  if (s.runs.empty()) return;
+  std::string csv = "algo,seed,safety,target,success_rate,final_error_mean,final_error_std,collisions,time_mean,"
+                    "time_std,violation_steps,skipped\n";
+  for (const ShelfRealRun& r : s.runs) {
+    const std::string head = r.run->cell.algo + "," + std::to_string(r.run->cell.seed) + "," + r.safety + ",";
+    if (!r.skipped.empty()) {
+      std::string why = r.skipped;
+      for (char& c : why)
+        if (c == ',' || c == '\n' || c == '"') c = ';';
+      csv += head + ",,,,,,,," + why + "\n";
+      continue;
+    }
+    for (size_t t = 0; t < r.result.targets.size(); ++t) {
+      const ShelfRealTarget& x = r.result.targets[t];
+      csv += head + std::to_string(t + 1) + "," + num(x.success_rate) + "," + num(x.final_error_mean) + "," +
+             num(x.final_error_std) + "," + std::to_string(x.collisions) + "," +
+             (x.success_rate > 0 ? num(x.time_mean) + "," + num(x.time_std) : std::string(",")) + "," + std::to_string(r.result.max_constraint_violations) + ",\n";
+    }
+  }
+  write_file_atomic(csv_path, csv);
+  const std::string note =
+      "Every finished shelf policy through the ShelfEnvReal protocol (atacom shelf-real: " +
+      std::to_string(s.protocol.trials) + " trials, two sequential targets, success = within " +
+      short_num(s.protocol.success_radius) + " m for " + short_num(s.protocol.hold_time) + " s, at most " +
+      short_num(s.protocol.max_time_per_target) +
+      " s per target), the final policy, the run's env settings and layer, the same trials (protocol seed " +
+      std::to_string(s.protocol.seed) +
+      ") for every policy. Success and final error are IQM [95 % CI] over policies; an attractor is deterministic, "
+      "one evaluation. Collisions and violation steps are summed over policies. The paper (one ATACOM-SAC policy, "
+      "real TIAGo): success 90 % / 90 %, final error 0.038 / 0.047 m, 0 collisions.";
+  md << "## ShelfEnvReal\n\n" << note << "\n\n| algo | layer | policies | success 1 | success 2 | final error 1 [m] | "
+     << "final error 2 [m] | collisions | violation steps |\n|---|---|---|---|---|---|---|---|---|\n";
+  html << "<h2>ShelfEnvReal</h2><p class=\"note\">" << html_escape(note) << "</p><table><tr><th>algo</th>"
+       << "<th>layer</th><th>policies</th><th>success 1</th><th>success 2</th><th>final error 1 [m]</th>"
+       << "<th>final error 2 [m]</th><th>collisions</th><th>violation steps</th></tr>\n";
+  for (const ShelfRealAlgo& a : s.algos) {
+    const std::string n = a.attractor ? "1 (deterministic)" : std::to_string(a.n);
+    const std::string c[4] = {iqm_text(a.success[0], d, a.algo + "/success1", a.attractor),
+                              iqm_text(a.success[1], d, a.algo + "/success2", a.attractor),
+                              iqm_text(a.error[0], d, a.algo + "/error1", a.attractor),
+                              iqm_text(a.error[1], d, a.algo + "/error2", a.attractor)};
+    md << "| " << a.algo << " | " << a.safety << " | " << n;
+    html << "<tr><td class=\"l\">" << a.algo << "</td><td class=\"l\">" << a.safety << "</td><td>" << n << "</td>";
+    for (const std::string& x : c) {
+      md << " | " << x;
+      html << "<td>" << x << "</td>";
+    }
+    md << " | " << a.collisions << " | " << a.violation_steps << " |\n";
+    html << "<td" << (a.collisions > 0 ? " class=\"bad\"" : "") << ">" << a.collisions << "</td><td>"
+         << a.violation_steps << "</td></tr>\n";
+  }
+  html << "</table>\n";
+  md << "\n";
+  // Skipped runs, one line per algorithm and reason: "safelayer-sac, seeds 0, 1, 2: ...".
+  std::vector<std::pair<std::string, std::string>> skipped;  // (algo: reason, seeds)
+  for (const ShelfRealRun& r : s.runs) {
+    if (r.skipped.empty()) continue;
+    const std::string key = r.run->cell.algo + ": " + r.skipped;
+    auto it = std::find_if(skipped.begin(), skipped.end(), [&](const auto& x) { return x.first == key; });
+    if (it == skipped.end()) skipped.emplace_back(key, std::to_string(r.run->cell.seed));
+    else it->second += ", " + std::to_string(r.run->cell.seed);
+  }
+  if (skipped.empty()) return;
+  md << "Not evaluated:\n\n";
+  html << "<p class=\"note\">Not evaluated:</p><ul>";
+  for (const auto& [key, seeds] : skipped) {
+    const size_t colon = key.find(": ");
+    const std::string algo = key.substr(0, colon) + " (seeds " + seeds + ")", why = key.substr(colon + 2);
+    md << "- " << algo << ": " << markdown_text(why) << "\n";
+    html << "<li>" << html_escape(algo + ": " + why) << "</li>";
+  }
+  md << "\n";
+  html << "</ul>\n";
+}
+
 }  // namespace
 
 ReportResult write_report(const ReportOptions& opts) {
@@ -377,6 +468,7 @@ ReportResult write_report(const ReportOptions& opts) {
       html << "</table>\n";
     }
   }
+  write_shelf_real(d, out("shelf_real.csv"), md, html);
   md << "## Final vs best evaluation\n\n| run | final return | best return (at env steps) | final distance | best "
         "distance | fell far |\n|---|---|---|---|---|---|\n";
   html << "<h2>Final vs best evaluation</h2><table><tr><th>run</th><th>final return</th><th>best return</th>"
@@ -408,7 +500,7 @@ ReportResult write_report(const ReportOptions& opts) {
     html << "</table>\n";
   }
   html << "<p class=\"note\">Files: summary.csv, time_to_target.csv, summary.md, prob_improvement.csv, "
-          "final_vs_best.csv, missing.csv and "
+          "final_vs_best.csv, missing.csv, shelf_real.csv (a sweep with shelf runs) and "
           "the SVG figures beside this page.</p></body></html>\n";
   write_file_atomic(out("summary.md"), md.str());
   write_file_atomic(res.index_html, html.str());

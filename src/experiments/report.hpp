@@ -7,6 +7,9 @@
 //   prob_improvement.csv  env, metric, algo, baseline, n_algo, n_baseline, p_improvement (ATACOM-SAC vs each)
 //   final_vs_best.csv     per run: final and best evaluation side by side, drop = 1 when the final one fell far
 //   missing.csv           cells without a finished run: state and log
+//   shelf_real.csv        (sweeps with shelf runs) every finished shelf policy through the ShelfEnvReal
+//                         protocol: algo, seed, safety, target, success_rate, final_error_mean, ...
+//                         (src/experiments/report_shelf_real.hpp); skipped runs with their reason
 //   summary.md            all of it as tables
 //   box_<env>.svg         one panel per metric, one box per algo, a point per seed
 //   target_<env>.svg      the same for the censored metrics (envs with a quality target), runs that
