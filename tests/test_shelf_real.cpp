@@ -47,4 +47,8 @@ TEST_CASE("shelf-real protocol rejects bad settings", "[shelf_real]") {
   c.hold_time = 20.0;
   const auto zero = make_zero_policy(kArmObsDim, kArmJoints);
   CHECK_THROWS_AS(evaluate_shelf_real(default_arm_env_config(ArmTask::Shelf), c, *zero), std::invalid_argument);
+  // A run's env.dt can be any value in (0, 1): a tiny one is refused, naming env.dt, not run for hours.
+  ArmEnvConfig tiny = default_arm_env_config(ArmTask::Shelf);
+  tiny.dt = 1e-9;
+  CHECK_THROWS_WITH(evaluate_shelf_real(tiny, default_shelf_real_config(), *zero), Catch::Contains("env.dt"));
 }
