@@ -2,6 +2,7 @@
 #include "src/experiments/report.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -310,10 +311,48 @@ void write_shelf_real(const ReportData& d, const std::string& csv_path, std::ost
 
 }  // namespace
 
+std::vector<int64_t> parse_seed_list(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return std::invalid_argument("--seeds '" + printable_text(text, 200) + "': " + why +
+                                 " (a list like 0-4 or 0,2,5 of seeds >= 0, at most 100000)");
+  };
+  if (text.empty() || text.size() > 1000) throw bad("empty or too long");
+  std::vector<int64_t> out;
+  std::stringstream in(text);
+  for (std::string part; std::getline(in, part, ',');) {
+    const size_t dash = part.find('-');
+    const auto number = [&](const std::string& t) {
+      if (t.empty() || t.size() > 18 || t.find_first_not_of("0123456789") != std::string::npos)
+        throw bad("'" + printable_text(t, 40) + "' is not a seed");
+      return int64_t(std::stoll(t));
+    };
+    const int64_t lo = number(part.substr(0, dash));
+    const int64_t hi = dash == std::string::npos ? lo : number(part.substr(dash + 1));
+    if (hi < lo) throw bad("a range runs downwards");
+    if (hi - lo >= 100000 || out.size() + size_t(hi - lo + 1) > 100000) throw bad("too many seeds");
+    for (int64_t v = lo; v <= hi; ++v) out.push_back(v);
+  }
+  if (text.back() == ',') throw bad("a trailing comma");
+  std::sort(out.begin(), out.end());
+  if (std::adjacent_find(out.begin(), out.end()) != out.end()) throw bad("a seed repeats");
+  return out;
+}
+
+std::string report_dir_name(const ReportOptions& opts) {
+  if (opts.seeds.empty()) return "report";
+  for (char c : opts.seeds_label)
+    if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == ','))
+      throw std::invalid_argument("report: seeds label '" + printable_text(opts.seeds_label, 40) + "' is not a --seeds list");
+  std::string label = opts.seeds_label;
+  std::replace(label.begin(), label.end(), ',', '_');
+  return "report-seeds-" + label;
+}
+
 ReportResult write_report(const ReportOptions& opts) {
   const ReportData d = load_report_data(opts);
   ReportResult res;
-  res.report_dir = (fs::path(opts.dir) / "report").string();
+  const std::string name = report_dir_name(opts);
+  res.report_dir = (fs::path(opts.dir) / name).string();
   res.index_html = (fs::path(res.report_dir) / "index.html").string();
   res.runs = int(d.runs.size());
   for (const ReportRun& r : d.runs) {
@@ -324,9 +363,9 @@ ReportResult write_report(const ReportOptions& opts) {
     throw std::invalid_argument("sweep directory '" + opts.dir + "' holds no finished run yet (see `atacom sweep status " +
                                 opts.dir + "`)");
   // DIR/report is written into: a symlink (or a file) in its place is refused, never written through.
-  require_no_links(opts.dir, "report", "sweep directory");
+  require_no_links(opts.dir, name, "sweep directory");
   if (fs::symlink_status(res.report_dir).type() != fs::file_type::not_found && !fs::is_directory(fs::symlink_status(res.report_dir)))
-    throw std::invalid_argument("sweep directory '" + opts.dir + "': 'report' is not a directory");
+    throw std::invalid_argument("sweep directory '" + opts.dir + "': '" + name + "' is not a directory");
   fs::create_directories(res.report_dir);
   const auto out = [&](const std::string& name) { return (fs::path(res.report_dir) / name).string(); };
 
@@ -386,7 +425,9 @@ ReportResult write_report(const ReportOptions& opts) {
 
   // ---- Markdown and HTML, side by side
   std::ostringstream md, html;
-  md << "# Sweep report: " << markdown_text(opts.dir) << "\n\n" << res.finished << " of " << res.runs << " runs finished.\n\n"
+  const std::string subset = opts.seeds.empty() ? "" : " (seeds " + opts.seeds_label + " only)";
+  md << "# Sweep report: " << markdown_text(opts.dir) << "\n\n" << res.finished << " of " << res.runs << " runs finished"
+     << subset << ".\n\n"
      << methods_text(d) << "\n\n";
   size_t most_seeds = 0;
   for (const Row& r : rows) most_seeds = std::max(most_seeds, r.n);
@@ -399,7 +440,7 @@ ReportResult write_report(const ReportOptions& opts) {
           "svg{max-width:100%;height:auto}"
           "p.note{max-width:60em;font-size:13px}</style></head><body>\n"
        << "<h1>Sweep report</h1><p>" << html_escape(opts.dir) << ": " << res.finished << " of " << res.runs
-       << " runs finished.</p>" << (few.empty() ? "" : "<p class=\"note\"><b>" + html_escape(few) + "</b></p>")
+       << " runs finished" << html_escape(subset) << ".</p>" << (few.empty() ? "" : "<p class=\"note\"><b>" + html_escape(few) + "</b></p>")
        << "<p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
   for (const auto& env : d.envs) {
     md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n"

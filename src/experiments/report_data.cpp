@@ -1,6 +1,7 @@
 // Reading a sweep directory for the report: every cell of its spec, finished or not.
 #include "src/experiments/report_data.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -132,6 +133,7 @@ ReportData load_report_data(const ReportOptions& opts) {
   d.envs = spec.envs;
   d.algos = spec.algos;
   for (const SweepCell& c : sweep_cells(spec)) {
+    if (!opts.seeds.empty() && !std::binary_search(opts.seeds.begin(), opts.seeds.end(), c.seed)) continue;
     ReportRun r;
     r.cell = c;
     const CellStatus st = cell_status(opts.dir, c);
