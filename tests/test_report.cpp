@@ -18,6 +18,7 @@
 #include "src/experiments/report_stats.hpp"
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
+#include "tests/csv_rows.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -30,24 +31,7 @@ std::string slurp(const std::string& p) {
   return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
 
-std::vector<std::map<std::string, std::string>> read_csv(const std::string& p) {
-  std::istringstream in(slurp(p));
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> head;
-  std::stringstream hs(line);
-  for (std::string c; std::getline(hs, c, ',');) head.push_back(c);
-  std::vector<std::map<std::string, std::string>> rows;
-  while (std::getline(in, line)) {
-    std::stringstream ls(line);
-    std::map<std::string, std::string> r;
-    size_t i = 0;
-    for (std::string c; std::getline(ls, c, ','); ++i) r[head.at(i)] = c;
-    REQUIRE(i == head.size());
-    rows.push_back(r);
-  }
-  return rows;
-}
+std::vector<std::map<std::string, std::string>> read_csv(const std::string& p) { return csv_rows::read(p); }
 
 // Independent reference statistics: sorted copies and textbook formulas.
 double ref_quantile(std::vector<double> v, double q) {
@@ -390,6 +374,13 @@ TEST_CASE("report: a sweep without atacom-sac reports atacom-ppo's improvement o
 TEST_CASE("report --seeds: only those seeds' cells, in DIR/report-seeds-<list>; bad lists name --seeds", "[report]") {
   CHECK(parse_seed_list("0-4") == std::vector<int64_t>{0, 1, 2, 3, 4});
   CHECK(parse_seed_list("7,0-2") == std::vector<int64_t>{0, 1, 2, 7});
+  // The directory and title carry the list in one form whatever order it was typed in.
+  CHECK(seed_list_text(parse_seed_list("7,0-2")) == "0-2,7");
+  CHECK(seed_list_text({3}) == "3");
+  ReportOptions seven;
+  seven.seeds = parse_seed_list("7,0-2");
+  CHECK(report_dir_name(seven) == "report-seeds-0-2_7");
+  CHECK(report_dir_name(ReportOptions{}) == "report");
   for (const char* bad : {"", "4-0", "1,1", "0-2,2", "a", "-1", "1-", ",1", "1,", "0-100000", "1.5"}) {
     INFO(bad);
     CHECK_THROWS_WITH(parse_seed_list(bad), Catch::Contains("--seeds"));
@@ -402,8 +393,7 @@ TEST_CASE("report --seeds: only those seeds' cells, in DIR/report-seeds-<list>; 
   write_two_level_runs(dir, spec, "sac");
   ReportOptions o;
   o.dir = dir;
-  o.seeds_label = "0-2";
-  o.seeds = parse_seed_list(o.seeds_label);
+  o.seeds = parse_seed_list("0-2");
   const ReportResult r = write_report(o);
   CHECK(r.runs == 6);
   CHECK(r.report_dir == dir + "/report-seeds-0-2");

@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -18,41 +17,13 @@
 #include "src/experiments/report.hpp"
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
+#include "tests/csv_rows.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace atacom;
 
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-
-std::vector<std::string> split(const std::string& line) {  // keeps empty fields
-  std::vector<std::string> out(1);
-  for (char c : line)
-    if (c == ',') out.emplace_back();
-    else out.back() += c;
-  return out;
-}
-
-std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
-  std::istringstream in(slurp(p));
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> head = split(line);
-  std::vector<std::map<std::string, std::string>> rows;
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = split(line);
-    REQUIRE(f.size() == head.size());
-    std::map<std::string, std::string> r;
-    for (size_t i = 0; i < f.size(); ++i) r[head[i]] = f[i];
-    rows.push_back(r);
-  }
-  return rows;
-}
 
 // A run directory with only a summary covering `steps` (the report counts it finished).
 void fake_run(const fs::path& run, int64_t steps) {
@@ -90,7 +61,7 @@ TEST_CASE("report: every finished shelf policy goes through the ShelfEnvReal pro
   ro.dir = dir.string();
   write_report(ro);
 
-  const auto rows = read_csv(dir / "report/shelf_real.csv");
+  const auto rows = csv_rows::read(dir / "report/shelf_real.csv");
   std::map<std::string, std::vector<std::map<std::string, std::string>>> by;  // "algo/seed"
   for (const auto& r : rows) by[r.at("algo") + "/" + r.at("seed")].push_back(r);
   // Trained runs: the same numbers as the protocol on the run's policy, through ATACOM.
@@ -132,7 +103,7 @@ TEST_CASE("report: every finished shelf policy goes through the ShelfEnvReal pro
     CHECK(std::stod(lr[t].at("success_rate")) == Approx(la_want.targets[t].success_rate).epsilon(1e-11));
     CHECK(lr[t].at("collisions") == "0");
   }
-  const std::string md = slurp(dir / "report/summary.md");
+  const std::string md = run_dir_compare::slurp((dir / "report/summary.md").string());
   CHECK(md.find("## ShelfEnvReal") != std::string::npos);
   CHECK(md.find("| la-atacom | atacom | 1 (deterministic) |") != std::string::npos);
   CHECK(md.find("| atacom-sac | atacom | 2 | ") != std::string::npos);

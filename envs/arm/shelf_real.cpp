@@ -59,12 +59,12 @@ ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfR
   ArmEnvConfig ec = env_config;
   // A run's config may carry any dt in (0, 1): bound the trial length, so a
   // tiny dt is an error, not an hours-long loop (or an int overflow).
-  constexpr double kMaxTrialSteps = 1e6;
+  constexpr int64_t kMaxTrialSteps = 1000000;
   const double trial_steps = double(cfg.targets) * cfg.max_time_per_target / ec.dt;
-  if (!(trial_steps <= kMaxTrialSteps))
+  if (!(trial_steps <= double(kMaxTrialSteps)))
     throw std::invalid_argument("shelf-real: targets x max_time_per_target / env.dt = " + std::to_string(trial_steps) +
-                                " steps per trial, above the limit of 1000000 (env.dt " + std::to_string(ec.dt) +
-                                " s is too small)");
+                                " steps per trial, above the limit of " + std::to_string(kMaxTrialSteps) + " (env.dt " +
+                                std::to_string(ec.dt) + " s is too small)");
   const int max_steps = static_cast<int>(std::lround(cfg.max_time_per_target / ec.dt));
   const int hold_steps = static_cast<int>(std::lround(cfg.hold_time / ec.dt));
   ec.horizon = cfg.targets * max_steps + 1;  // the protocol, not the horizon, ends a trial

@@ -18,10 +18,11 @@ const RegisterCommand reg{Command{
       add_number_flag(app, "--curve-resamples", o->curve_resamples, range::closed(10, 100000),
                       "bootstrap resamples per learning-curve point");
       add_number_flag(app, "--bootstrap-seed", o->seed, seed_range<uint64_t>(), "bootstrap seed");
-      app.add_option("--seeds", o->seeds_label,
+      auto seeds = std::make_shared<std::string>();
+      app.add_option("--seeds", *seeds,
                      "only these seeds' cells, e.g. 0-4 or 0,2,5 (the report goes to DIR/report-seeds-<list>)");
-      return [o]() {
-        if (!o->seeds_label.empty()) o->seeds = parse_seed_list(o->seeds_label);
+      return [o, seeds]() {
+        if (!seeds->empty()) o->seeds = parse_seed_list(*seeds);
         const ReportResult r = write_report(*o);
         std::cout << "report: " << r.finished << " of " << r.runs << " runs finished";
         if (!r.missing.empty()) std::cout << " (" << r.missing.size() << " missing or failed: listed in the report)";

@@ -2,7 +2,6 @@
 #include "src/experiments/report.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -287,23 +286,26 @@ void write_shelf_real(const ReportData& d, const std::string& csv_path, std::ost
   }
   html << "</table>\n";
   md << "\n";
-  // Skipped runs, one line per algorithm and reason: "safelayer-sac, seeds 0, 1, 2: ...".
-  std::vector<std::pair<std::string, std::string>> skipped;  // (algo: reason, seeds)
+  // Skipped runs, one line per algorithm and reason: "safelayer-sac (seeds 0, 1, 2): ...".
+  struct Skipped {
+    std::string algo, why, seeds;
+  };
+  std::vector<Skipped> skipped;
   for (const ShelfRealRun& r : s.runs) {
     if (r.skipped.empty()) continue;
-    const std::string key = r.run->cell.algo + ": " + r.skipped;
-    auto it = std::find_if(skipped.begin(), skipped.end(), [&](const auto& x) { return x.first == key; });
-    if (it == skipped.end()) skipped.emplace_back(key, std::to_string(r.run->cell.seed));
-    else it->second += ", " + std::to_string(r.run->cell.seed);
+    const std::string seed = std::to_string(r.run->cell.seed);
+    auto it = std::find_if(skipped.begin(), skipped.end(),
+                           [&](const Skipped& x) { return x.algo == r.run->cell.algo && x.why == r.skipped; });
+    if (it == skipped.end()) skipped.push_back({r.run->cell.algo, r.skipped, seed});
+    else it->seeds += ", " + seed;
   }
   if (skipped.empty()) return;
   md << "Not evaluated:\n\n";
   html << "<p class=\"note\">Not evaluated:</p><ul>";
-  for (const auto& [key, seeds] : skipped) {
-    const size_t colon = key.find(": ");
-    const std::string algo = key.substr(0, colon) + " (seeds " + seeds + ")", why = key.substr(colon + 2);
-    md << "- " << algo << ": " << markdown_text(why) << "\n";
-    html << "<li>" << html_escape(algo + ": " + why) << "</li>";
+  for (const Skipped& x : skipped) {
+    const std::string who = x.algo + " (seeds " + x.seeds + ")";
+    md << "- " << who << ": " << markdown_text(x.why) << "\n";
+    html << "<li>" << html_escape(who + ": " + x.why) << "</li>";
   }
   md << "\n";
   html << "</ul>\n";
@@ -338,14 +340,22 @@ std::vector<int64_t> parse_seed_list(const std::string& text) {
   return out;
 }
 
+std::string seed_list_text(const std::vector<int64_t>& seeds) {
+  std::string out;
+  for (size_t i = 0; i < seeds.size();) {
+    size_t j = i;
+    while (j + 1 < seeds.size() && seeds[j + 1] == seeds[j] + 1) ++j;
+    out += (out.empty() ? "" : ",") + std::to_string(seeds[i]) + (j > i ? "-" + std::to_string(seeds[j]) : "");
+    i = j + 1;
+  }
+  return out;
+}
+
 std::string report_dir_name(const ReportOptions& opts) {
   if (opts.seeds.empty()) return "report";
-  for (char c : opts.seeds_label)
-    if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == ','))
-      throw std::invalid_argument("report: seeds label '" + printable_text(opts.seeds_label, 40) + "' is not a --seeds list");
-  std::string label = opts.seeds_label;
-  std::replace(label.begin(), label.end(), ',', '_');
-  return "report-seeds-" + label;
+  std::string list = seed_list_text(opts.seeds);
+  std::replace(list.begin(), list.end(), ',', '_');
+  return "report-seeds-" + list;
 }
 
 ReportResult write_report(const ReportOptions& opts) {
@@ -425,7 +435,7 @@ ReportResult write_report(const ReportOptions& opts) {
 
   // ---- Markdown and HTML, side by side
   std::ostringstream md, html;
-  const std::string subset = opts.seeds.empty() ? "" : " (seeds " + opts.seeds_label + " only)";
+  const std::string subset = opts.seeds.empty() ? "" : " (seeds " + seed_list_text(opts.seeds) + " only)";
   md << "# Sweep report: " << markdown_text(opts.dir) << "\n\n" << res.finished << " of " << res.runs << " runs finished"
      << subset << ".\n\n"
      << methods_text(d) << "\n\n";

@@ -50,15 +50,18 @@ struct ReportOptions {
   // best evaluation's by more than drop_distance (metres).
   double drop_return_frac = 0.1;
   double drop_distance = 0.2;
-  // Only these seeds' cells (empty: every cell), e.g. the seeds a sweep has
-  // completed while it runs on; the report then goes to DIR/report-seeds-<seeds_label>.
+  // Only these seeds' cells (ascending, no repeats; empty: every cell), e.g.
+  // the seeds a sweep has completed while it runs on; the report then goes
+  // to DIR/report-seeds-<list> (report_dir_name).
   std::vector<int64_t> seeds;
-  std::string seeds_label;  // "0-4": the --seeds text; [0-9,-] only
 };
 // Parses "0-4", "0,2,5" or "0-4,9" into the ascending seeds (no repeats; at
 // most 100000). Throws std::invalid_argument naming --seeds otherwise.
 std::vector<int64_t> parse_seed_list(const std::string& text);
-// The directory name of a report: "report", or "report-seeds-<label>".
+// Ascending seeds as the shortest such list: {0, 1, 2, 7} -> "0-2,7".
+std::string seed_list_text(const std::vector<int64_t>& seeds);
+// The directory name of a report: "report", or "report-seeds-0-2_7" (the
+// list with '_' for ','), from opts.seeds.
 std::string report_dir_name(const ReportOptions& opts);
 
 struct ReportResult {

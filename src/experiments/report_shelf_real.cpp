@@ -64,12 +64,13 @@ ShelfRealSection shelf_real_section(const ReportData& d) {
     s.runs.push_back(row);
   }
   for (const std::string& algo : d.algos) {
+    const Algorithm& alg = find_algorithm(algo);
     ShelfRealAlgo a;
     a.algo = algo;
+    a.safety = alg.safety.name();
+    a.attractor = alg.source == ActionSource::Attractor;
     for (const ShelfRealRun& row : s.runs) {
       if (row.run->cell.algo != algo || !row.skipped.empty()) continue;
-      a.safety = row.safety;
-      a.attractor = find_algorithm(algo).source == ActionSource::Attractor;
       ++a.n;
       for (int t = 0; t < 2 && t < int(row.result.targets.size()); ++t) {
         a.success[t].push_back(row.result.targets[t].success_rate);

@@ -1,0 +1,40 @@
+// A report CSV as rows of column name -> cell text: every cell, empty ones
+// included (an empty last cell too), and every row as wide as the header.
+#pragma once
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/run_dir_compare.hpp"
+
+namespace csv_rows {
+
+inline std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out(1);
+  for (char c : line)
+    if (c == ',') out.emplace_back();
+    else out.back() += c;
+  return out;
+}
+
+inline std::vector<std::map<std::string, std::string>> read(const std::filesystem::path& p) {
+  std::istringstream in(run_dir_compare::slurp(p.string()));
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> head = split(line);
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    const std::vector<std::string> f = split(line);
+    REQUIRE(f.size() == head.size());
+    std::map<std::string, std::string> r;
+    for (size_t i = 0; i < f.size(); ++i) r[head[i]] = f[i];
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+}  // namespace csv_rows
