@@ -371,7 +371,7 @@ TEST_CASE("report: a sweep without atacom-sac reports atacom-ppo's improvement o
   fs::remove_all(dir);
 }
 
-TEST_CASE("report --seeds: only those seeds' cells, in DIR/report-seeds-<list>; bad lists name --seeds", "[report]") {
+TEST_CASE("report --seeds: only those seeds' cells, in DIR/report-seeds-<list>, bad lists name --seeds", "[report]") {
   CHECK(parse_seed_list("0-4") == std::vector<int64_t>{0, 1, 2, 3, 4});
   CHECK(parse_seed_list("7,0-2") == std::vector<int64_t>{0, 1, 2, 7});
   // The directory and title carry the list in one form whatever order it was typed in.
