@@ -18,44 +18,14 @@
 #include "atacom/parallel.hpp"
 #include "atacom/trainer.hpp"
 #include "train/algorithms.hpp"
+#include "tests/test_files.hpp"
+#include "tests/train_run.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace atacom;
 
 namespace {
-
-std::string tmp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("atacom_algo_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-
-// progress.csv without its wall-clock columns (wall_s, time_to_target_s), empty cells kept.
-std::string without_wall(const std::string& csv) {
-  std::istringstream in(csv);
-  std::string line, out;
-  std::vector<std::string> head;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    for (size_t at = 0;;) {
-      const size_t comma = line.find(',', at);
-      cells.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
-      if (comma == std::string::npos) break;
-      at = comma + 1;
-    }
-    if (head.empty()) head = cells;
-    for (size_t k = 0; k < cells.size(); ++k)
-      if (k >= head.size() || (head[k] != "wall_s" && head[k] != "time_to_target_s")) out += cells[k] + ",";
-    out += "\n";
-  }
-  return out;
-}
 
 json summary_without_timing(json s) {
   for (const char* k : {"wall_s", "time_to_target_s", "eval_wall_s", "eval_share", "host"}) s.erase(k);
@@ -77,14 +47,6 @@ json small(const std::string& algo, int64_t steps) {
   if (a.learner == "ppo")
     cfg["ppo"] = {{"actor", net}, {"critic", net}, {"rollout_steps", 16}, {"minibatch_size", 16}, {"epochs", 2}};
   return cfg;
-}
-
-TrainSummary train(const json& cfg, const std::string& dir, bool resume = false, int64_t stop_after = 0) {
-  TrainOptions o;
-  o.out_dir = dir;
-  o.resume = resume;
-  o.stop_after = stop_after;
-  return run_training(resolve_run_config(cfg), o);
 }
 
 bool layer_available(SafetyLayer s) {

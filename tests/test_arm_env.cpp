@@ -28,7 +28,7 @@ std::array<double, kArmJoints> random_q(const TiagoArmModel& m, Rng& rng, double
   return q;
 }
 
-uint64_t fnv(uint64_t h, const void* data, size_t n) {
+uint64_t fnv_step(uint64_t h, const void* data, size_t n) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
   return h;
@@ -37,17 +37,17 @@ uint64_t fnv(uint64_t h, const void* data, size_t n) {
 uint64_t state_hash(const ArmEnv& env) {
   const EnvBuffers& b = env.buffers();
   uint64_t h = 0xcbf29ce484222325ull;
-  h = fnv(h, env.q().data(), env.q().size() * sizeof(double));
-  h = fnv(h, env.goal().data(), env.goal().size() * sizeof(double));
-  h = fnv(h, b.obs.data(), b.obs.size() * sizeof(float));
-  h = fnv(h, b.reward.data(), b.reward.size() * sizeof(float));
-  h = fnv(h, b.constraints.data(), b.constraints.size() * sizeof(double));
-  h = fnv(h, b.terminated.data(), b.terminated.size());
-  h = fnv(h, b.info.data(), b.info.size() * sizeof(float));
+  h = fnv_step(h, env.q().data(), env.q().size() * sizeof(double));
+  h = fnv_step(h, env.goal().data(), env.goal().size() * sizeof(double));
+  h = fnv_step(h, b.obs.data(), b.obs.size() * sizeof(float));
+  h = fnv_step(h, b.reward.data(), b.reward.size() * sizeof(float));
+  h = fnv_step(h, b.constraints.data(), b.constraints.size() * sizeof(double));
+  h = fnv_step(h, b.terminated.data(), b.terminated.size());
+  h = fnv_step(h, b.info.data(), b.info.size() * sizeof(float));
   return h;
 }
 
-std::vector<double> random_actions(Rng& rng, int N) {
+std::vector<double> random_arm_actions(Rng& rng, int N) {
   std::vector<double> a(static_cast<size_t>(N) * kArmJoints);
   for (double& x : a) x = rng.uniform(-1.0, 1.0);
   return a;
@@ -120,7 +120,7 @@ TEST_CASE("batched step equals the per-env scalar reference", "[arm_env]") {
     ProjectorBatch pb(env.projector_model(), N);
     int checked = 0, collisions = 0;
     for (int s = 0; s < 100; ++s) {
-      const auto a = random_actions(rng, N);
+      const auto a = random_arm_actions(rng, N);
       std::vector<double> q_before = env.q();
       env.step(a.data());
       env.constraint_model(pb, 0, N);
@@ -217,7 +217,7 @@ TEST_CASE("arm env is deterministic across thread counts", "[arm_env]") {
       ArmEnv env(default_arm_env_config(task), N);
       env.seed(42);
       Rng rng(43, 0);
-      for (int s = 0; s < 40; ++s) env.step(random_actions(rng, N).data());
+      for (int s = 0; s < 40; ++s) env.step(random_arm_actions(rng, N).data());
       hashes[t] = state_hash(env);
     }
     set_num_threads(0);
@@ -227,7 +227,7 @@ TEST_CASE("arm env is deterministic across thread counts", "[arm_env]") {
     ArmEnv other(default_arm_env_config(task), N);
     other.seed(41);
     Rng rng(43, 0);
-    for (int s = 0; s < 40; ++s) other.step(random_actions(rng, N).data());
+    for (int s = 0; s < 40; ++s) other.step(random_arm_actions(rng, N).data());
     CHECK(state_hash(other) != hashes[0]);
   }
 }
@@ -237,17 +237,17 @@ TEST_CASE("arm env snapshot and restore re-step identically", "[arm_env]") {
   ArmEnv env(default_arm_env_config(ArmTask::Shelf), N);
   env.seed(8);
   Rng rng(9, 0);
-  for (int s = 0; s < 30; ++s) env.step(random_actions(rng, N).data());
+  for (int s = 0; s < 30; ++s) env.step(random_arm_actions(rng, N).data());
   std::stringstream snap;
   env.save_state(snap);
   const Rng rng_saved = rng;
-  for (int s = 0; s < 30; ++s) env.step(random_actions(rng, N).data());
+  for (int s = 0; s < 30; ++s) env.step(random_arm_actions(rng, N).data());
   const uint64_t h1 = state_hash(env);
   ArmEnv other(default_arm_env_config(ArmTask::Shelf), N);
   other.seed(1234);
   other.load_state(snap);
   rng = rng_saved;
-  for (int s = 0; s < 30; ++s) other.step(random_actions(rng, N).data());
+  for (int s = 0; s < 30; ++s) other.step(random_arm_actions(rng, N).data());
   CHECK(state_hash(other) == h1);
   std::stringstream wrong;
   ArmEnv small(default_arm_env_config(ArmTask::Shelf), 3);

@@ -17,17 +17,12 @@
 #include "src/core/binary_io.hpp"
 #include "src/core/redsdf_model.hpp"
 #include "train/checkpoint.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using namespace atacom;
 
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  REQUIRE(f);
-  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-}
 
 std::string sample() {
   ContainerWriter w("TESTMAGC", 3u);

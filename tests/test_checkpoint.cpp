@@ -6,16 +6,13 @@
 
 #include "src/core/binary_io.hpp"
 #include "train/checkpoint.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 std::string tmp_path(const std::string& name) {
   return (fs::temp_directory_path() / ("atacom_ckpt_" + std::to_string(::getpid()) + "_" + name)).string();
-}
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
 void dump(const std::string& p, const std::string& bytes) {
   std::ofstream f(p, std::ios::binary | std::ios::trunc);

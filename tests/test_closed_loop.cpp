@@ -14,7 +14,7 @@ using namespace atacom::test;
 
 namespace {
 
-struct RolloutStats {
+struct ClosedLoopStats {
   double max_c = -1e300;       // max over rows, envs and steps after the first
   long steps = 0;
   long nonfinite = 0;
@@ -25,7 +25,7 @@ struct RolloutStats {
 // [-1, 1]^m and held for a random 1..20 steps (a persistent random walk
 // reaches the boundaries far more often than white noise). The same seed
 // gives the same alpha sequence with and without the projector.
-RolloutStats rollout(const Scenario& sc, int N, int T, uint64_t seed, bool project, double start_violation = 0.0,
+ClosedLoopStats rollout(const Scenario& sc, int N, int T, uint64_t seed, bool project, double start_violation = 0.0,
                      int record_from = 0) {
   const ProjectorModel& mod = sc.model;
   const int n = sc.n(), m = mod.m, k = mod.k, p = mod.p;
@@ -49,7 +49,7 @@ RolloutStats rollout(const Scenario& sc, int N, int T, uint64_t seed, bool proje
       q[e] = sc.sample_start(rng[e], t0[e]);
     }
   }
-  RolloutStats st;
+  ClosedLoopStats st;
   using RM = Eigen::Matrix<double, -1, -1, Eigen::RowMajor>;
   for (int step = 0; step < T; ++step) {
     for (int e = 0; e < N; ++e) {
@@ -150,7 +150,7 @@ TEST_CASE("closed loop: scenario Jacobians match finite differences", "[closed_l
 
 TEST_CASE("closed loop: random policies stay safe through the projector (short)", "[closed_loop]") {
   for (auto& sc : scenarios()) {
-    const RolloutStats safe = rollout(*sc, 16, 320, 1, true);
+    const ClosedLoopStats safe = rollout(*sc, 16, 320, 1, true);
     INFO(sc->name << ": max c = " << safe.max_c << " bound " << bound_for(sc->name));
     CHECK(safe.nonfinite == 0);
     CHECK(safe.max_c <= bound_for(sc->name));
@@ -160,8 +160,8 @@ TEST_CASE("closed loop: random policies stay safe through the projector (short)"
 TEST_CASE("closed loop: 100k steps per system stay below the stated bound, without ATACOM they violate", "[slow]") {
   for (auto& sc : scenarios()) {
     for (uint64_t seed : {11u, 12u}) {
-      const RolloutStats safe = rollout(*sc, 50, 1000, seed, true);
-      const RolloutStats raw = rollout(*sc, 50, 1000, seed, false);
+      const ClosedLoopStats safe = rollout(*sc, 50, 1000, seed, true);
+      const ClosedLoopStats raw = rollout(*sc, 50, 1000, seed, false);
       INFO(sc->name << " seed " << seed << ": ATACOM max c = " << safe.max_c << " (bound " << bound_for(sc->name)
                     << "), raw max c = " << raw.max_c << ", bias-out steps " << safe.bias_out);
       CHECK(safe.steps == 50000);
@@ -179,7 +179,7 @@ TEST_CASE("closed loop: starting in violation, error correction returns to the s
     // system can move against the row; a car started sideways inside a disc
     // first has to drive out along its heading. After 5 s every row must be
     // back below the closed-loop bound.
-    const RolloutStats st = rollout(*sc, 16, 300, 21, true, 0.05, 150);
+    const ClosedLoopStats st = rollout(*sc, 16, 300, 21, true, 0.05, 150);
     INFO(sc->name << ": max c from 5 s on " << st.max_c);
     CHECK(st.nonfinite == 0);
     if (sc->name.rfind("bicycle", 0) == 0) {

@@ -24,6 +24,7 @@
 #include "atacom/trainer.hpp"
 #include "src/core/snapshot.hpp"
 #include "train/run_files.hpp"
+#include "tests/test_files.hpp"
 
 using namespace atacom;
 namespace fs = std::filesystem;
@@ -34,13 +35,6 @@ int info_column(const EnvSpec& s, const std::string& name) {
   for (size_t c = 0; c < s.info_names.size(); ++c)
     if (s.info_names[c] == name) return int(c);
   return -1;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
 }
 
 }  // namespace

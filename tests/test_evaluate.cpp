@@ -20,6 +20,7 @@
 #include "train/run_files.hpp"
 #include "train/sac_learner.hpp"
 #include "build_kind.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -42,11 +43,6 @@ constexpr bool kFixtureBuild = false;
 #endif
 
 bool same(double a, double b) { return kFixtureBuild ? a == b : a == Approx(b).epsilon(1e-4).margin(1e-6); }
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
 
 // progress.csv as a header and rows of cells.
 struct Csv {

@@ -10,7 +10,7 @@
 using nlohmann::json;
 
 namespace {
-json run_line(const std::string& line, bool* ok = nullptr) {
+json filter_text_line(const std::string& line, bool* ok = nullptr) {
   std::string out;
   const bool r = atacom::filter_line(line, 1, out);
   if (ok) *ok = r;
@@ -21,7 +21,7 @@ json run_line(const std::string& line, bool* ok = nullptr) {
 TEST_CASE("filter safelayer: one row active, the box inactive (Dalal's closed form)", "[filter]") {
   bool ok = false;
   // -0.01 + 0.1 (a_0 + 0.05) <= 0  ->  a_0 <= 0.05; a_pi = (1, 0.5).
-  const json r = run_line(R"({"method":"safelayer","dt":0.1,"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0],[0,1]],
+  const json r = filter_text_line(R"({"method":"safelayer","dt":0.1,"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0],[0,1]],
       "c":[-0.01,-5],"J_x":[[1],[0]],"xdot":[0.05],"alpha":[1,0.5],"id":7})", &ok);
   REQUIRE(ok);
   CHECK(r["a"][0].get<double>() == Approx(0.05).margin(1e-12));
@@ -37,14 +37,14 @@ TEST_CASE("filter safelayer: one row active, the box inactive (Dalal's closed fo
 
 TEST_CASE("filter safelayer: defaults (dt 1/30, threshold 0), alpha clipped, per-row threshold", "[filter]") {
   // Far inside: a = clip(alpha) = (1, -1), nothing active.
-  json r = run_line(R"({"method":"safelayer","f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[-1],"alpha":[3,-2]})");
+  json r = filter_text_line(R"({"method":"safelayer","f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[-1],"alpha":[3,-2]})");
   CHECK(r["a"] == json::array({1.0, -1.0}));
   CHECK(r["active"] == json::array());
   // c + dt a_0 <= C with c = -0.02, dt = 1/30, C = -0.01: a_0 <= 0.3.
-  r = run_line(R"({"method":"safelayer","f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[-0.02],"alpha":[1,0],
+  r = filter_text_line(R"({"method":"safelayer","f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[-0.02],"alpha":[1,0],
       "threshold":[-0.01]})");
   CHECK(r["a"][0].get<double>() == Approx(0.3).margin(1e-12));
-  r = run_line(R"({"method":"safelayer","f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[-0.02],"alpha":[1,0],
+  r = filter_text_line(R"({"method":"safelayer","f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[-0.02],"alpha":[1,0],
       "threshold":-0.01})");
   CHECK(r["a"][0].get<double>() == Approx(0.3).margin(1e-12));
 }
@@ -54,12 +54,12 @@ TEST_CASE("filter safelayer: the box is part of the QP (two rows and a bound act
   // a_0 - a_1 <= -1.5 as well, the solution (-0.75, 0.75) of the two rows is
   // in the box; with -1.9 it would be (-0.95, 0.95), also in the box; and
   // a_0 <= -1.2 forces the bound a_0 = -1 (infeasible: least violation).
-  json r = run_line(R"({"method":"safelayer","dt":1,"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,1],[1,-1]],"c":[0,1.5],
+  json r = filter_text_line(R"({"method":"safelayer","dt":1,"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,1],[1,-1]],"c":[0,1.5],
       "alpha":[1,1]})");
   CHECK(r["a"][0].get<double>() == Approx(-0.75).margin(1e-10));
   CHECK(r["a"][1].get<double>() == Approx(0.75).margin(1e-10));
   CHECK(r["active"] == json::array({0, 1}));
-  r = run_line(R"({"method":"safelayer","dt":1,"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[1.2],"alpha":[0.3,0.4]})");
+  r = filter_text_line(R"({"method":"safelayer","dt":1,"f":[0,0],"G":[[1,0],[0,1]],"J_q":[[1,0]],"c":[1.2],"alpha":[0.3,0.4]})");
   CHECK(r["a"][0].get<double>() == Approx(-1.0).margin(1e-12));
   CHECK(r["a"][1].get<double>() == Approx(0.4).margin(1e-12));
   CHECK(r["status_flags"] == json::array({"infeasible"}));
@@ -78,14 +78,14 @@ TEST_CASE("filter safelayer: bad keys are refused by name", "[filter]") {
   };
   for (const auto& tc : cases) {
     bool ok = true;
-    const json r = run_line(tc.line, &ok);
+    const json r = filter_text_line(tc.line, &ok);
     INFO(tc.line);
     CHECK_FALSE(ok);
     CHECK_THAT(r["error"].get<std::string>(), Catch::Contains(tc.expect));
   }
   // the default method is still ATACOM, and says so explicitly too
   bool ok = false;
-  const json r = run_line(R"({"method":"atacom","f":[0],"G":[[1]],"J_q":[[1]],"c":[-1],"alpha":[0.5]})", &ok);
+  const json r = filter_text_line(R"({"method":"atacom","f":[0],"G":[[1]],"J_q":[[1]],"c":[-1],"alpha":[0.5]})", &ok);
   CHECK(ok);
   CHECK(r.contains("lambda"));
 }

@@ -11,16 +11,11 @@
 #include <vector>
 
 #include "src/core/fs_util.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 struct TempDir {
   fs::path p;
   explicit TempDir(const std::string& name)

@@ -27,6 +27,7 @@
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
 #include "tests/shell_run.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -40,18 +41,13 @@ std::string tmp(const std::string& name) {
   return p.string();
 }
 
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-
 void put(const fs::path& p, const std::string& text) {
   fs::create_directories(p.parent_path());
   std::ofstream(p, std::ios::binary) << text;
 }
 
 // `atacom ARGS` with stderr merged, killed after `seconds` (a hang fails the test instead of hanging it).
-ShellResult atacom_cli(const std::string& args, int seconds = 60) {
+ShellResult atacom_cli_timed(const std::string& args, int seconds = 60) {
   return run_shell("timeout -s KILL " + std::to_string(seconds) + " " + std::string(ATACOM_ATACOM_EXE) + " " + args +
                    " 2>&1 < /dev/null");
 }
@@ -156,11 +152,11 @@ TEST_CASE("hostile sweep dir: progress.csv as /dev/zero, a FIFO or a huge file i
   fs::create_symlink("/dev/zero", fs::path(dir) / cells[0].run_dir() / "progress.csv");
   REQUIRE(::mkfifo((fs::path(dir) / cells[1].run_dir() / "progress.csv").c_str(), 0644) == 0);
   const auto t0 = std::chrono::steady_clock::now();
-  ShellResult r = atacom_cli("sweep status " + dir, 30);
+  ShellResult r = atacom_cli_timed("sweep status " + dir, 30);
   INFO(r.out);
   CHECK((r.rc == 0 || r.rc == 1));  // an answer, not a kill by the timeout (137) or an error
   CHECK(r.out.find("total: 2 done") != std::string::npos);
-  r = atacom_cli("report " + dir + " --resamples 100", 30);
+  r = atacom_cli_timed("report " + dir + " --resamples 100", 30);
   INFO(r.out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("progress file") != std::string::npos);
@@ -171,10 +167,10 @@ TEST_CASE("hostile sweep dir: progress.csv as /dev/zero, a FIFO or a huge file i
     std::ofstream(fs::path(dir) / cells[0].run_dir() / "progress.csv") << "env_steps,eval_return_mean\n";
   }
   fs::resize_file(fs::path(dir) / cells[0].run_dir() / "progress.csv", kMaxProgressBytes + 1);
-  r = atacom_cli("report " + dir + " --resamples 100", 30);
+  r = atacom_cli_timed("report " + dir + " --resamples 100", 30);
   CHECK(r.rc == 2);
   CHECK(r.out.find("more than the limit of " + std::to_string(kMaxProgressBytes)) != std::string::npos);
-  CHECK(atacom_cli("sweep status " + dir, 30).rc == 0);  // status reads the last row only
+  CHECK(atacom_cli_timed("sweep status " + dir, 30).rc == 0);  // status reads the last row only
   CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60));
   fs::remove_all(dir);
 }
@@ -191,7 +187,7 @@ TEST_CASE("hostile sweep dir: planted links make no write and no deletion outsid
   std::string dir = tmp("links_runs");
   fs::create_directories(fs::path(dir) / "runs");
   fs::create_symlink(victim, fs::path(dir) / "runs/pendulum");
-  ShellResult r = atacom_cli("sweep " + spec_file + " --out " + dir + " --jobs 1");
+  ShellResult r = atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --jobs 1");
   INFO(r.out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("'runs/pendulum' is a symbolic link") != std::string::npos);
@@ -202,7 +198,7 @@ TEST_CASE("hostile sweep dir: planted links make no write and no deletion outsid
   dir = tmp("links_log");
   fs::create_directories(fs::path(dir) / "logs");
   fs::create_symlink(victim + "/file.txt", fs::path(dir) / ("logs/" + cell + ".log"));
-  r = atacom_cli("sweep " + spec_file + " --out " + dir + " --jobs 1");
+  r = atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --jobs 1");
   INFO(r.out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("cannot open log file") != std::string::npos);
@@ -213,7 +209,7 @@ TEST_CASE("hostile sweep dir: planted links make no write and no deletion outsid
   dir = tmp("links_lock");
   fs::create_directories(fs::path(dir) / "state");
   fs::create_symlink(victim + "/created_by_lock", fs::path(dir) / ("state/" + cell + ".lock"));
-  r = atacom_cli("sweep " + spec_file + " --out " + dir + " --jobs 1");
+  r = atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --jobs 1");
   INFO(r.out);
   CHECK(r.rc == 2);
   CHECK(!fs::exists(victim + "/created_by_lock"));
@@ -223,7 +219,7 @@ TEST_CASE("hostile sweep dir: planted links make no write and no deletion outsid
   dir = tmp("links_statedir");
   fs::create_directories(dir);
   fs::create_symlink(victim, fs::path(dir) / "state");
-  r = atacom_cli("sweep " + spec_file + " --out " + dir + " --jobs 1");
+  r = atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --jobs 1");
   CHECK(r.rc == 2);
   CHECK(r.out.find("'state' is a symbolic link") != std::string::npos);
   CHECK(!fs::exists(victim + "/" + cell + ".json"));
@@ -238,7 +234,7 @@ TEST_CASE("hostile sweep dir: planted links make no write and no deletion outsid
   put(fs::path(dir) / "runs/pendulum/sac/seed-0/checkpoint.bin", "x");
   put(fs::path(dir) / "runs/pendulum/sac/seed-0/config.json", "{}");
   fs::create_symlink("/dev/zero", fs::path(dir) / "runs/pendulum/sac/seed-0/progress.csv");
-  r = atacom_cli("sweep " + learn_file + " --out " + dir + " --jobs 1", 60);
+  r = atacom_cli_timed("sweep " + learn_file + " --out " + dir + " --jobs 1", 60);
   INFO(r.out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("seed-0/progress.csv' is not a regular file") != std::string::npos);
@@ -252,7 +248,7 @@ TEST_CASE("hostile sweep dir: planted links make no write and no deletion outsid
   const std::string elsewhere = tmp("links_report_victim");
   fs::create_directories(elsewhere);
   fs::create_symlink(elsewhere, fs::path(dir) / "report");
-  r = atacom_cli("report " + dir + " --resamples 100");
+  r = atacom_cli_timed("report " + dir + " --resamples 100");
   INFO(r.out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("'report' is a symbolic link") != std::string::npos);
@@ -260,8 +256,8 @@ TEST_CASE("hostile sweep dir: planted links make no write and no deletion outsid
 
   // Without links the same sweep runs (and a rerun of it still works).
   dir = tmp("links_none");
-  CHECK(atacom_cli("sweep " + spec_file + " --out " + dir + " --jobs 1").rc == 0);
-  CHECK(atacom_cli("sweep " + spec_file + " --out " + dir + " --jobs 1").rc == 0);
+  CHECK(atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --jobs 1").rc == 0);
+  CHECK(atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --jobs 1").rc == 0);
   for (const auto& d : {dir, spec_file, victim, elsewhere, tmp("links_report")}) fs::remove_all(d);
 }
 
@@ -395,25 +391,25 @@ TEST_CASE("hostile sweep dir: a state file of wrong types or out-of-range number
 
   const std::string spec_file = tmp("types_spec.json"), dir = tmp("types");
   put(spec_file, zero_spec(3).dump());
-  REQUIRE(atacom_cli("sweep " + spec_file + " --out " + dir + " --dry-run").rc == 0);
+  REQUIRE(atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --dry-run").rc == 0);
   put(fs::path(dir) / "state/pendulum-zero-seed0.json", R"({"state":"running","attempts":"x"})");
   put(fs::path(dir) / "state/pendulum-zero-seed1.json", "[1,2,3]");
   put(fs::path(dir) / "state/pendulum-zero-seed2.json", R"({"state":"failed","attempts":5000000000,"exit_code":1e300})");
   save_or_check_spec(dir, parse_sweep_spec(zero_spec(3)));
-  ShellResult r = atacom_cli("sweep status " + dir);
+  ShellResult r = atacom_cli_timed("sweep status " + dir);
   INFO(r.out);
   CHECK(r.rc == 1);  // not done; no error
   CHECK(r.out.find("type_error") == std::string::npos);
   CHECK(r.out.find("705032704") == std::string::npos);
   CHECK(r.out.find("-2147483648") == std::string::npos);
-  r = atacom_cli("sweep " + spec_file + " --out " + dir + " --jobs 1");
+  r = atacom_cli_timed("sweep " + spec_file + " --out " + dir + " --jobs 1");
   INFO(r.out);
   CHECK(r.rc == 0);
   CHECK(r.out.find("type_error") == std::string::npos);
   const auto rec = parse_cell_record(slurp(dir + "/state/pendulum-zero-seed0.json"));
   REQUIRE(rec);
   CHECK((rec->state == "done" && rec->attempts == 1));
-  CHECK(atacom_cli("sweep status " + dir).rc == 0);
+  CHECK(atacom_cli_timed("sweep status " + dir).rc == 0);
   fs::remove_all(dir);
   fs::remove(spec_file);
 }
@@ -433,26 +429,26 @@ TEST_CASE("hostile render: a horizon beyond the page limit is refused before the
   const std::string cfg = tmp("render_cfg.json"), out = tmp("render.html");
   put(cfg, R"({"horizon": 10000000})");
   const auto t0 = std::chrono::steady_clock::now();
-  ShellResult r = atacom_cli("render --env table --policy zero --config " + cfg + " --out " + out, 60);
+  ShellResult r = atacom_cli_timed("render --env table --policy zero --config " + cfg + " --out " + out, 60);
   INFO(r.out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("env.horizon is 10000000 steps, more than the 10000 one page shows") != std::string::npos);
   CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30));
   CHECK(!fs::exists(out));
   put(cfg, R"({"horizon": 50, "horizon": 60})");
-  r = atacom_cli("render --env table --policy zero --config " + cfg + " --out " + out);
+  r = atacom_cli_timed("render --env table --policy zero --config " + cfg + " --out " + out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("duplicate key 'horizon'") != std::string::npos);
-  r = atacom_cli("render --env table --policy zero --config " + fs::temp_directory_path().string() + " --out " + out);
+  r = atacom_cli_timed("render --env table --policy zero --config " + fs::temp_directory_path().string() + " --out " + out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("is a directory") != std::string::npos);
   CHECK(r.out.find("underflow") == std::string::npos);
   put(cfg, std::string(70, '[') + std::string(70, ']'));
-  r = atacom_cli("render --env table --policy zero --config " + cfg + " --out " + out);
+  r = atacom_cli_timed("render --env table --policy zero --config " + cfg + " --out " + out);
   CHECK(r.rc == 2);
   CHECK(r.out.find("nested deeper than 64") != std::string::npos);
   put(cfg, R"({"horizon": 40})");
-  CHECK(atacom_cli("render --env table --policy zero --config " + cfg + " --out " + out).rc == 0);
+  CHECK(atacom_cli_timed("render --env table --policy zero --config " + cfg + " --out " + out).rc == 0);
   fs::remove(cfg);
   fs::remove(out);
 }
@@ -468,7 +464,7 @@ TEST_CASE("hostile JSON: a NUL byte is never the end of the input", "[hostile]")
   CHECK(filter_line(valid, 1, answer));
   const std::string spec_file = tmp("nul_spec.json");
   put(spec_file, zero_spec(1).dump() + '\0' + "garbage");
-  const ShellResult r = atacom_cli("sweep " + spec_file + " --out " + tmp("nul_out") + " --dry-run");
+  const ShellResult r = atacom_cli_timed("sweep " + spec_file + " --out " + tmp("nul_out") + " --dry-run");
   CHECK(r.rc == 2);
   CHECK(r.out.find("NUL byte") != std::string::npos);
   fs::remove(spec_file);

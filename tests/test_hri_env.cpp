@@ -36,13 +36,13 @@ ArmEnvConfig hri_config(HumanSplit split = HumanSplit::Train, bool upright = fal
   return c;
 }
 
-int info_col(const EnvSpec& s, const std::string& name) {
+int hri_info_column(const EnvSpec& s, const std::string& name) {
   const auto it = std::find(s.info_names.begin(), s.info_names.end(), name);
   REQUIRE(it != s.info_names.end());
   return int(it - s.info_names.begin());
 }
 
-std::vector<double> random_actions(Rng& rng, int N, double scale = 1.0) {
+std::vector<double> random_hri_actions(Rng& rng, int N, double scale = 1.0) {
   std::vector<double> a(static_cast<size_t>(N) * kArmJoints);
   for (double& x : a) x = scale * rng.uniform(-1.0, 1.0);
   return a;
@@ -53,7 +53,7 @@ HumanFkResult human_of(const ArmEnv& env, int e) {
   return human_fk_reference(env.human_model(), &h.pose[size_t(e) * kHumanPoseDim], &h.pose_rate[size_t(e) * kHumanPoseDim]);
 }
 
-uint64_t state_hash(const ArmEnv& env) {
+uint64_t hri_state_hash(const ArmEnv& env) {
   const EnvBuffers& b = env.buffers();
   uint64_t h = bin::fnv1a(nullptr, 0);
   h = bin::fnv1a(env.q().data(), env.q().size() * sizeof(double), h);
@@ -87,7 +87,7 @@ TEST_CASE("hri: 43 rows (hri-upright 44), p = 1, spills in info, real-time human
   CHECK(pm.p == 1);
   for (const char* name : {"collision", "human_collision", "spill", "spill_15", "min_human_distance", "final_distance"})
     CHECK(std::find(s.info_names.begin(), s.info_names.end(), name) != s.info_names.end());
-  CHECK(s.info_reduce[size_t(info_col(s, "spill_15"))] == InfoReduce::Sum);
+  CHECK(s.info_reduce[size_t(hri_info_column(s, "spill_15"))] == InfoReduce::Sum);
   // Real time: one library frame (30 Hz) per env step of 1/30 s.
   CHECK(env.config().hri.frames_per_step * env.human_motion().fps() * s.dt == Approx(1.0).epsilon(1e-12));
   ArmEnv up(hri_config(HumanSplit::Train, true), 3);
@@ -134,8 +134,8 @@ TEST_CASE("hri: spills count episodes at 25 and 15 deg, starts hold the cup with
   ArmEnv env(hri_config(), N);
   env.seed(21);
   const EnvSpec& s = env.spec();
-  const int ni = int(s.info_names.size()), c25 = info_col(s, "spill"), c15 = info_col(s, "spill_15"),
-            ct = info_col(s, "tilt");
+  const int ni = int(s.info_names.size()), c25 = hri_info_column(s, "spill"), c15 = hri_info_column(s, "spill_15"),
+            ct = hri_info_column(s, "tilt");
   // Starts: every env of many resets within start_tilt, clear of every row.
   int fallbacks = 0;
   for (int round = 0; round < 8; ++round) {
@@ -309,7 +309,7 @@ TEST_CASE("hri: batched step equals the per-env scalar reference (rows, J_q, J_x
   const int K = env.spec().num_constraints;
   int checked = 0, ends = 0;
   for (int s = 0; s < 60; ++s) {
-    const auto a = random_actions(rng, N);
+    const auto a = random_hri_actions(rng, N);
     env.step(a.data());
     env.constraint_model(pb, 0, N);
     const EnvBuffers& b = env.buffers();
@@ -344,8 +344,8 @@ TEST_CASE("hri: identical for 1 and 2 threads, snapshot and restore re-step bitw
     ArmEnv env(hri_config(), N);
     env.seed(42);
     Rng rng(43, 0);
-    for (int s = 0; s < 40; ++s) env.step(random_actions(rng, N).data());
-    h[t] = state_hash(env);
+    for (int s = 0; s < 40; ++s) env.step(random_hri_actions(rng, N).data());
+    h[t] = hri_state_hash(env);
   }
   set_num_threads(0);
   CHECK(h[0] == h[1]);
@@ -353,18 +353,18 @@ TEST_CASE("hri: identical for 1 and 2 threads, snapshot and restore re-step bitw
   ArmEnv env(hri_config(), 20);
   env.seed(8);
   Rng rng(9, 0);
-  for (int s = 0; s < 30; ++s) env.step(random_actions(rng, 20).data());
+  for (int s = 0; s < 30; ++s) env.step(random_hri_actions(rng, 20).data());
   std::stringstream snap;
   env.save_state(snap);
   const Rng saved = rng;
-  for (int s = 0; s < 40; ++s) env.step(random_actions(rng, 20).data());
-  const uint64_t h1 = state_hash(env);
+  for (int s = 0; s < 40; ++s) env.step(random_hri_actions(rng, 20).data());
+  const uint64_t h1 = hri_state_hash(env);
   ArmEnv other(hri_config(), 20);
   other.seed(1234);
   other.load_state(snap);
   rng = saved;
-  for (int s = 0; s < 40; ++s) other.step(random_actions(rng, 20).data());
-  CHECK(state_hash(other) == h1);
+  for (int s = 0; s < 40; ++s) other.step(random_hri_actions(rng, 20).data());
+  CHECK(hri_state_hash(other) == h1);
 }
 
 // The safety claim on motion the policy never trains on: the same random
@@ -383,11 +383,11 @@ TEST_CASE("hri: random alpha through ATACOM on held-out motion: 20x fewer human 
     env->seed(3);
     const EnvSpec& s = env->spec();
     const int ni = int(s.info_names.size());
-    const int col_h = info_col(s, "human_collision"), col_c = info_col(s, "collision");
-    const int col_b = on ? info_col(s, "atacom_bias_out") : -1;
+    const int col_h = hri_info_column(s, "human_collision"), col_c = hri_info_column(s, "collision");
+    const int col_b = on ? hri_info_column(s, "atacom_bias_out") : -1;
     Rng rng(17, 0);
     for (int t = 0; t < steps; ++t) {
-      env->step(random_actions(rng, N).data());
+      env->step(random_hri_actions(rng, N).data());
       const EnvBuffers& b = env->buffers();
       for (int i = 0; i < N; ++i) {
         const float hc = b.info[size_t(i) * ni + col_h], cc = b.info[size_t(i) * ni + col_c];
@@ -444,10 +444,10 @@ TEST_CASE("hri-upright: random alpha through ATACOM spills only where the projec
     env->seed(11);
     const EnvSpec& s = env->spec();
     const int ni = int(s.info_names.size()), k = s.num_constraints;
-    const int col_s = info_col(s, "spill"), col_b = info_col(s, "atacom_bias_out");
+    const int col_s = hri_info_column(s, "spill"), col_b = hri_info_column(s, "atacom_bias_out");
     Rng rng(29, 0);
     for (int t = 0; t < steps; ++t) {
-      env->step(random_actions(rng, N).data());
+      env->step(random_hri_actions(rng, N).data());
       const EnvBuffers& b = env->buffers();
       for (int i = 0; i < N; ++i) {
         n.episodes += b.done(i);
@@ -492,12 +492,12 @@ TEST_CASE("hri: 768k steps of random alpha through ATACOM with the learned field
       env->seed(seed);
       const EnvSpec& s = env->spec();
       const int ni = int(s.info_names.size());
-      const int col_c = info_col(s, "collision"), col_h = info_col(s, "human_collision"), col_s = info_col(s, "spill"),
-                col_b = info_col(s, "atacom_bias_out");
+      const int col_c = hri_info_column(s, "collision"), col_h = hri_info_column(s, "human_collision"), col_s = hri_info_column(s, "spill"),
+                col_b = hri_info_column(s, "atacom_bias_out");
       Rng rng(seed + 100, 0);
       long static_hits = 0, human = 0, spills = 0, over_feasible = 0, over = 0;
       for (int t = 0; t < steps; ++t) {
-        env->step(random_actions(rng, N).data());
+        env->step(random_hri_actions(rng, N).data());
         const EnvBuffers& b = env->buffers();
         for (int i = 0; i < N; ++i) {
           const float* info = &b.info[size_t(i) * ni];

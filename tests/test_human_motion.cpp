@@ -26,7 +26,7 @@ using namespace atacom;
 
 namespace {
 
-const HumanModel& model() {
+const HumanModel& human_model() {
   static const HumanModel m = load_human_model();
   return m;
 }
@@ -49,7 +49,7 @@ struct MotionStats {
 };
 
 MotionStats measure(const HumanMotionLibrary& lib, int lo, int hi) {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   const double fps = lib.fps();
   MotionStats s;
   for (int f = lo; f < hi; ++f)
@@ -98,12 +98,12 @@ MotionStats measure(const HumanMotionLibrary& lib, int lo, int hi) {
 TEST_CASE("human motion generator is deterministic and seed-dependent", "[human]") {
   HumanMotionConfig c = default_human_motion_config();
   c.frames = 1500;
-  const HumanMotionLibrary a = generate_human_motion(model(), c), b = generate_human_motion(model(), c);
+  const HumanMotionLibrary a = generate_human_motion(human_model(), c), b = generate_human_motion(human_model(), c);
   REQUIRE(a.frames.size() == b.frames.size());
   CHECK(std::memcmp(a.frames.data(), b.frames.data(), a.frames.size() * sizeof(float)) == 0);
   CHECK(a.checksum() == b.checksum());
   c.seed += 1;
-  const HumanMotionLibrary d = generate_human_motion(model(), c);
+  const HumanMotionLibrary d = generate_human_motion(human_model(), c);
   CHECK(d.checksum() != a.checksum());
   CHECK(a.num_frames >= 1500);
 }
@@ -116,7 +116,7 @@ TEST_CASE("human motion: the stored library is the generator's output for its ma
   CHECK(lib.num_frames >= 18000);
   CHECK(lib.num_frames < 19000);
   CHECK(std::filesystem::file_size(data_file("human_motion.bin")) < 3u * 1024 * 1024);
-  const HumanMotionLibrary gen = generate_human_motion(model(), lib.config);
+  const HumanMotionLibrary gen = generate_human_motion(human_model(), lib.config);
   REQUIRE(gen.num_frames == lib.num_frames);
   REQUIRE(gen.segments.size() == lib.segments.size());
   CHECK(gen.test_begin == lib.test_begin);
@@ -190,7 +190,7 @@ TEST_CASE("human motion keeps out of the table and away from the robot's body", 
   // into the robot, which could not get out of the way (robot body at the
   // HRI start's torso height 0.3 m).
   const HumanMotionLibrary& lib = library();
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   const HumanMotionConfig& c = lib.config;
   const Shape table = Shape::box(c.table_center, c.table_half, "table");
   const ArmScene scene = build_arm_scene(default_arm_scene_config(ArmTask::Table), load_tiago_arm_model(0.3));
@@ -276,8 +276,8 @@ TEST_CASE("human motion files: corrupt or foreign files are rejected with a clea
   std::filesystem::create_directories(dir);
   HumanMotionConfig c = default_human_motion_config();
   c.frames = 300;
-  const HumanMotionLibrary lib = generate_human_motion(model(), c);
-  save_human_motion(lib, model(), dir + "/m.bin", dir + "/m.json");
+  const HumanMotionLibrary lib = generate_human_motion(human_model(), c);
+  save_human_motion(lib, human_model(), dir + "/m.bin", dir + "/m.json");
   const HumanMotionLibrary back = load_human_motion(dir + "/m.bin", dir + "/m.json");
   CHECK(back.checksum() == lib.checksum());
   CHECK(back.test_begin == lib.test_begin);
@@ -298,7 +298,7 @@ TEST_CASE("human motion files: corrupt or foreign files are rejected with a clea
 // the generator's bounds (walks peak in [0.3, 1.4] m/s, no point above 3.5).
 TEST_CASE("human motion speed statistics: frame speeds are the positions' derivatives, within the bounds", "[human]") {
   const HumanMotionLibrary& lib = library();
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   const int pelvis = m.joint_index("pelvis"), tips[2] = {m.joint_index("fingertip_l"), m.joint_index("fingertip_r")},
             wrists[2] = {m.joint_index("wrist_l"), m.joint_index("wrist_r")};
   const double h = 1e-3;  // frames

@@ -24,15 +24,15 @@ using Eigen::Vector3d;
 
 namespace {
 
-const HumanModel& model() {
+const HumanModel& rows_human_model() {
   static const HumanModel m = load_human_model();
   return m;
 }
 
 Vector3d rand_vec(Rng& rng, double r) { return {rng.uniform(-r, r), rng.uniform(-r, r), rng.uniform(-r, r)}; }
 
-HumanPose random_pose(Rng& rng) {
-  const HumanModel& m = model();
+HumanPose half_range_pose(Rng& rng) {
+  const HumanModel& m = rows_human_model();
   HumanPose p{};
   p[0] = rng.uniform(0.6, 1.0);
   p[1] = rng.uniform(-0.3, 0.3);
@@ -40,7 +40,7 @@ HumanPose random_pose(Rng& rng) {
   for (int i = kHumanRootDofs; i < kHumanPoseDim; ++i) p[i] = rng.uniform(m.lower(i), m.upper(i)) * 0.5;
   return p;
 }
-HumanPose random_rate(Rng& rng) {
+HumanPose moderate_rate(Rng& rng) {
   HumanPose r{};
   for (int i = 0; i < kHumanPoseDim; ++i) r[i] = rng.uniform(-1.5, 1.5);
   return r;
@@ -93,7 +93,7 @@ TEST_CASE("human capsule distance matches dense sampling, its gradient finite di
 }
 
 TEST_CASE("human smooth minimum: within its bound below the exact min, exact when one capsule is nearest", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = rows_human_model();
   Rng rng(12, 0);
   CHECK(human_smooth_min_error_bound(0.02) == Approx(15 * 0.02 / 4));
   for (const double k : {0.01, 0.04}) {
@@ -101,7 +101,7 @@ TEST_CASE("human smooth minimum: within its bound below the exact min, exact whe
   int exact_cases = 0;
   double worst_gap = 0;
   for (int trial = 0; trial < 150; ++trial) {
-    const HumanPose pose = random_pose(rng), rate = random_rate(rng);
+    const HumanPose pose = half_range_pose(rng), rate = moderate_rate(rng);
     const HumanFkResult fk = human_fk_reference(m, pose.data(), rate.data());
     const Vector3d p = Vector3d(pose[0], pose[1], 1.0) + rand_vec(rng, 0.7);
     double A[kHumanCapsules][3], B[kHumanCapsules][3], VA[kHumanCapsules][3], VB[kHumanCapsules][3];
@@ -187,7 +187,7 @@ TEST_CASE("segment-segment distance matches brute force, also for points and par
 }
 
 TEST_CASE("human rows kernel matches the scalar reference for every env of a range", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = rows_human_model();
   Rng rng(14, 0);
   const int N = 19, P = 9, nq = 7;
   std::vector<double> delta(P);
@@ -197,7 +197,7 @@ TEST_CASE("human rows kernel matches the scalar reference for every env of a ran
   std::vector<HumanFkResult> humans;
   std::vector<double> poi(static_cast<size_t>(N) * P * 3), J(static_cast<size_t>(N) * P * 3 * nq);
   for (int e = 0; e < N; ++e) {
-    const HumanPose pose = random_pose(rng), rate = random_rate(rng);
+    const HumanPose pose = half_range_pose(rng), rate = moderate_rate(rng);
     humans.push_back(human_fk_reference(m, pose.data(), rate.data()));
     put_human(B, e, humans.back());
     for (int i = 0; i < P; ++i) {
@@ -233,7 +233,7 @@ TEST_CASE("human rows kernel matches the scalar reference for every env of a ran
 }
 
 TEST_CASE("human contact kernel matches the golden-section reference", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = rows_human_model();
   Rng rng(15, 0);
   const int N = 40, n_items = 5;
   HumanBatch B(N);
@@ -241,7 +241,7 @@ TEST_CASE("human contact kernel matches the golden-section reference", "[human]"
   for (double& r : radii) r = rng.uniform(0.03, 0.09);
   std::vector<HumanFkResult> humans;
   for (int e = 0; e < N; ++e) {
-    const HumanPose pose = random_pose(rng);
+    const HumanPose pose = half_range_pose(rng);
     humans.push_back(human_fk_reference(m, pose.data()));
     put_human(B, e, humans.back());
     for (int i = 0; i < n_items; ++i) {
@@ -281,7 +281,7 @@ TEST_CASE("human contact kernel matches the golden-section reference", "[human]"
 }
 
 TEST_CASE("human rows: J_x xdot is the time derivative of the rows along replayed motion, robot still", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = rows_human_model();
   const HumanMotionLibrary lib = load_default_human_motion();
   const TiagoArmModel arm = load_tiago_arm_model(0.3);
   // The reference's HRI start: torso 0.3, right arm [0, 0, pi/2, pi/2, pi/2, 0, 0].
@@ -343,7 +343,7 @@ TEST_CASE("human rows: J_x xdot is the time derivative of the rows along replaye
 TEST_CASE("human rows fused with the arm's FK lanes equal the range kernel on the same inputs", "[human]") {
   // The path an env takes: pose lanes -> human_fk_lanes -> human_rows_lanes
   // on the arm's ArmFkLanes (PoIs and Jacobians), without going through memory.
-  const HumanModel& m = model();
+  const HumanModel& m = rows_human_model();
   const TiagoArmModel arm = load_tiago_arm_model(0.3);
   const lanes::ArmFkConst ak(arm);
   Rng rng(16, 0);
@@ -351,9 +351,9 @@ TEST_CASE("human rows fused with the arm's FK lanes equal the range kernel on th
   HumanBatch B(N);
   lanes::vd q[kArmJoints];
   for (int e = 0; e < N; ++e) {
-    HumanPose pose = random_pose(rng);
+    HumanPose pose = half_range_pose(rng);
     pose[0] = rng.uniform(0.5, 0.9);
-    const HumanPose rate = random_rate(rng);
+    const HumanPose rate = moderate_rate(rng);
     std::copy(pose.begin(), pose.end(), &B.pose[static_cast<size_t>(e) * kHumanPoseDim]);
     std::copy(rate.begin(), rate.end(), &B.pose_rate[static_cast<size_t>(e) * kHumanPoseDim]);
     for (int j = 0; j < kArmJoints; ++j) q[j][e] = rng.uniform(arm.lower[static_cast<size_t>(j)], arm.upper[static_cast<size_t>(j)]);

@@ -41,7 +41,7 @@ std::shared_ptr<LearnedObstacle> random_body_field(float lift) {
   return o;
 }
 
-bool close(double a, double b, double abs_tol, double rel) {
+bool near_abs_rel_body(double a, double b, double abs_tol, double rel) {
   return std::abs(a - b) <= abs_tol + rel * std::max(std::abs(a), std::abs(b));
 }
 
@@ -142,7 +142,7 @@ TEST_CASE("learned body lanes: grad_p d matches central finite differences, the 
       for (int i = 0; i < npoi; ++i)
         for (int l = 0; l < L; ++l) {
           ++total;
-          bad += !close((dp[i][l] - dm[i][l]) / (2 * h), g[i][r][l], 2e-3, 1e-2);
+          bad += !near_abs_rel_body((dp[i][l] - dm[i][l]) / (2 * h), g[i][r][l], 2e-3, 1e-2);
         }
     }
     INFO(bad << " of " << total << " gradient entries off");

@@ -48,7 +48,7 @@ std::shared_ptr<LearnedHuman> random_human_field() {
 double le_margin_of(const ArmEnv& env) { return load_arm_learned_human(env.config().sdf)->margin; }
 
 // |a - b| within abs or rel of the larger magnitude.
-bool close(double a, double b, double abs_tol, double rel) {
+bool near_abs_rel(double a, double b, double abs_tol, double rel) {
   return std::abs(a - b) <= abs_tol + rel * std::max(std::abs(a), std::abs(b));
 }
 
@@ -79,9 +79,9 @@ TEST_CASE("redsdf batch: the pose gradient of the fused backward matches central
       };
       // Two step sizes that disagree: a ReLU kink inside the stencil (the derivative jumps there).
       const double f1 = fd(1e-3), f2 = fd(2.5e-4);
-      if (!close(f1, f2, 1e-5, 1e-3)) { ++kinked; continue; }
+      if (!near_abs_rel(f1, f2, 1e-5, 1e-3)) { ++kinked; continue; }
       ++total;
-      const bool off = !close(f2, gq[size_t(i * P + k)], 1e-4, 2e-3);
+      const bool off = !near_abs_rel(f2, gq[size_t(i * P + k)], 1e-4, 2e-3);
       if (off && bad < 8) WARN("point " << i << " pose " << k << " fd " << f2 << " kernel " << gq[size_t(i * P + k)]);
       bad += off;
     }
@@ -121,7 +121,7 @@ TEST_CASE("learned human lanes: grad_p d and dd/dt (root and joint motion) match
     for (int i = 0; i < npoi; ++i)
       for (int l = 0; l < L; ++l) {
         ++total;
-        bad += !close((dp[i][l] - dm[i][l]) / (2 * h), g[i][r][l], 2e-3, 1e-2);
+        bad += !near_abs_rel((dp[i][l] - dm[i][l]) / (2 * h), g[i][r][l], 2e-3, 1e-2);
       }
   }
   // dd/dt at fixed p: move the whole pose (root included) along its rate.
@@ -135,7 +135,7 @@ TEST_CASE("learned human lanes: grad_p d and dd/dt (root and joint motion) match
   for (int i = 0; i < npoi; ++i)
     for (int l = 0; l < L; ++l) {
       peak = std::max(peak, std::abs(ddt[i][l]));
-      bad_t += !close((dp[i][l] - dm[i][l]) / (2 * h), ddt[i][l], 3e-3, 2e-2);
+      bad_t += !near_abs_rel((dp[i][l] - dm[i][l]) / (2 * h), ddt[i][l], 3e-3, 2e-2);
     }
   INFO(bad << " of " << total << " gradient entries off, " << bad_t << " of " << npoi * L << " rates off, peak " << peak);
   CHECK(bad <= total / 50);

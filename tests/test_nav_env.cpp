@@ -22,14 +22,14 @@ using namespace atacom;
 
 namespace {
 
-uint64_t fnv(uint64_t h, const void* p, size_t n) {
+uint64_t fnv_bytes(uint64_t h, const void* p, size_t n) {
   const auto* b = static_cast<const unsigned char*>(p);
   for (size_t i = 0; i < n; ++i) { h ^= b[i]; h *= 1099511628211ull; }
   return h;
 }
 template <class T>
 uint64_t fnv_rows(uint64_t h, const std::vector<T>& v, size_t row, int i) {
-  return fnv(h, v.data() + row * i, row * sizeof(T));
+  return fnv_bytes(h, v.data() + row * i, row * sizeof(T));
 }
 
 // Hash of env i's complete state and last outputs.
@@ -54,7 +54,7 @@ uint64_t env_hash(const NavEnv& env, int i) {
   h = fnv_rows(h, b.constraints, kNavConstraints, i);
   h = fnv_rows(h, b.info, kNavInfoCount, i);
   const Rng::State r = s.rng[i].state();
-  h = fnv(h, r.s, sizeof(r.s));
+  h = fnv_bytes(h, r.s, sizeof(r.s));
   return h;
 }
 
@@ -65,7 +65,7 @@ uint64_t batch_hash(const NavEnv& env) {
 }
 
 // Uniform random actions keyed by (env id, global step): independent of N.
-void random_actions(int N, int step, std::vector<double>& a) {
+void random_nav_actions(int N, int step, std::vector<double>& a) {
   a.resize(2 * N);
   for (int i = 0; i < N; ++i) {
     Rng r(99, static_cast<uint64_t>(i) * 1000003ull + static_cast<uint64_t>(step));
@@ -192,7 +192,7 @@ TEST_CASE("nav env: Box2D bodies follow the exact unicycle step", "[nav_env]") {
   double max_pos = 0.0, max_ang = 0.0, max_fetch_pos = 0.0, max_fetch_ang = 0.0;
   int checked = 0;
   for (int step = 0; step < 1500; ++step) {
-    random_actions(N, step, a);
+    random_nav_actions(N, step, a);
     const std::vector<double> tiago0 = env.state().tiago, fetch0 = env.state().fetch;
     const std::vector<double> fetch_cmd0 = env.state().fetch_cmd;
     env.step(a.data());
@@ -398,7 +398,7 @@ TEST_CASE("nav env: identical across thread counts, block sizes and N", "[nav_en
     std::vector<double> a;
     int dones = 0;
     for (int s = 0; s < steps; ++s) {
-      random_actions(N, s, a);
+      random_nav_actions(N, s, a);
       env.step(a.data());
       for (int i = 0; i < N; ++i) dones += env.buffers().done(i);
     }
@@ -424,7 +424,7 @@ TEST_CASE("nav env: snapshot and restore reproduce the run bitwise", "[nav_env]"
   std::vector<double> a;
   int s = 0;
   for (; s < 300; ++s) {
-    random_actions(N, s, a);
+    random_nav_actions(N, s, a);
     env.step(a.data());
   }
   std::stringstream snap;
@@ -433,7 +433,7 @@ TEST_CASE("nav env: snapshot and restore reproduce the run bitwise", "[nav_env]"
   const uint64_t at_save = batch_hash(env);
   int dones = 0;
   for (int t = s; t < s + 400; ++t) {
-    random_actions(N, t, a);
+    random_nav_actions(N, t, a);
     env.step(a.data());
     for (int i = 0; i < N; ++i) dones += env.buffers().done(i);
   }
@@ -448,7 +448,7 @@ TEST_CASE("nav env: snapshot and restore reproduce the run bitwise", "[nav_env]"
     e->load_state(in);
     REQUIRE(batch_hash(*e) == at_save);
     for (int t = s; t < s + 400; ++t) {
-      random_actions(N, t, a);
+      random_nav_actions(N, t, a);
       e->step(a.data());
     }
     REQUIRE(batch_hash(*e) == reference);
@@ -481,7 +481,7 @@ TEST_CASE("nav env: Box2D solver iteration counts do not change trajectories", "
     env.seed(6);
     std::vector<double> a;
     for (int s = 0; s < 400; ++s) {
-      random_actions(24, s, a);
+      random_nav_actions(24, s, a);
       env.step(a.data());
     }
     return batch_hash(env);
@@ -496,7 +496,7 @@ TEST_CASE("nav env: observations stay within the declared bounds", "[nav_env]") 
   std::vector<double> a;
   const EnvSpec& s = env.spec();
   for (int step = 0; step < 700; ++step) {
-    random_actions(N, step, a);
+    random_nav_actions(N, step, a);
     env.step(a.data());
     for (size_t k = 0; k < env.buffers().obs.size(); ++k) {
       const int j = static_cast<int>(k % 18);
@@ -547,7 +547,7 @@ CollisionTally random_alpha_rollout(bool atacom, uint64_t seed) {
   std::vector<double> alpha;
   CollisionTally tally;
   for (int t = 0; t < T; ++t) {
-    random_actions(N, t, alpha);
+    random_nav_actions(N, t, alpha);
     env->step(alpha.data());
     const EnvBuffers& b = env->buffers();
     for (int i = 0; i < N; ++i) {
@@ -641,7 +641,7 @@ TEST_CASE("nav env: with ATACOM, snapshot/restore and thread counts give identic
         env->save_state(out);
         *save_at_half = out.str();
       }
-      random_actions(40, s, a);
+      random_nav_actions(40, s, a);
       env->step(a.data());
     }
     const auto& inner = dynamic_cast<const NavEnv&>(dynamic_cast<SafeEnv&>(*env).inner());
@@ -667,12 +667,12 @@ TEST_CASE("nav env: steady-state steps do not grow the heap", "[nav_env]") {
     auto env = make_env(req);
     env->seed(2);
     std::vector<double> a;
-    random_actions(256, 0, a);
+    random_nav_actions(256, 0, a);
     env->step(a.data());
     const struct mallinfo2 before = mallinfo2();
     int dones = 0;
     for (int s = 1; s < 800; ++s) {
-      random_actions(256, s, a);
+      random_nav_actions(256, s, a);
       env->step(a.data());
       for (int i = 0; i < 256; ++i) dones += env->buffers().done(i);
     }

@@ -20,6 +20,8 @@
 #include "train/ppo.hpp"
 #include "train/ppo_learner.hpp"
 #include "train/ppo_rollout.hpp"
+#include "tests/test_files.hpp"
+#include "tests/train_run.hpp"
 
 namespace fs = std::filesystem;
 using atacom::Mlp;
@@ -30,41 +32,8 @@ using nlohmann::json;
 
 namespace {
 
-std::string tmp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("atacom_ppo_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-
-// progress.csv without the wall_s column.
-std::string without_wall(const std::string& csv) {
-  std::istringstream in(csv);
-  std::string line, out;
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string cell;
-    for (int k = 0; std::getline(ls, cell, ','); ++k)
-      if (k != 2) out += cell + ",";
-    out += "\n";
-  }
-  return out;
-}
-
-atacom::TrainSummary train(const json& cfg, const std::string& dir, bool resume = false, int64_t stop_after = 0) {
-  atacom::TrainOptions o;
-  o.out_dir = dir;
-  o.resume = resume;
-  o.stop_after = stop_after;
-  return atacom::run_training(atacom::resolve_run_config(cfg), o);
-}
-
 // A short pendulum run: N 4, T 16 (64 transitions per update), 2 minibatches.
-json small_run(int64_t steps) {
+json small_ppo_run(int64_t steps) {
   return {{"ppo", {{"actor", {{"hidden", {32, 32}}}}, {"critic", {{"hidden", {32, 32}}}}, {"rollout_steps", 16},
                    {"epochs", 3}, {"minibatch_size", 32}, {"lr_actor", 1e-3}, {"lr_critic", 1e-3}}},
           {"train", {{"env", "pendulum"}, {"algo", "ppo"}, {"steps", steps}, {"num_envs", 4}, {"eval_every", 200},
@@ -403,7 +372,7 @@ TEST_CASE("ppo: the rollout keeps truncated episodes' true last observations and
 
 TEST_CASE("ppo: updates count minibatch steps, the progress columns, and the KL stop", "[ppo]") {
   const std::string dir = tmp_dir("count");
-  const auto s = train(small_run(400), dir);
+  const auto s = train(small_ppo_run(400), dir);
   // 400 steps of N 4: 6 full rollouts of 64 (T 16), each 3 epochs x 2 minibatches of 32
   REQUIRE(s.env_steps == 400);
   REQUIRE(s.updates == 6 * 3 * 2);
@@ -419,7 +388,7 @@ TEST_CASE("ppo: updates count minibatch steps, the progress columns, and the KL 
   fs::remove_all(dir);
   // A tiny target_kl stops every update after its first step: the first
   // minibatch's ratio is 1 (up to rounding), the second's is not.
-  json cfg = small_run(400);
+  json cfg = small_ppo_run(400);
   cfg["ppo"]["target_kl"] = 1e-9;
   const auto k = train(cfg, dir);
   REQUIRE(k.updates == 6);
@@ -429,7 +398,7 @@ TEST_CASE("ppo: updates count minibatch steps, the progress columns, and the KL 
 TEST_CASE("ppo: stopped inside a rollout and resumed == uninterrupted, bitwise", "[ppo]") {
   // Rollouts of 64 env steps: the stop at 120 and the evaluation at 200 both
   // fall inside one (batch steps 30 and 50 of T 16).
-  json cfg = small_run(400);
+  json cfg = small_ppo_run(400);
   cfg["ppo"]["lr_schedule"] = "linear";
   cfg["ppo"]["lr_decay_steps"] = 1000;
   cfg["ppo"]["value_clip_range"] = 1.0;
@@ -451,7 +420,7 @@ TEST_CASE("ppo: stopped inside a rollout and resumed == uninterrupted, bitwise",
 TEST_CASE("ppo: bitwise identical with 1 and 2 threads", "[ppo]") {
   // Above one GEMM tile (256 rows x 128 columns) and the TBB thresholds:
   // N 64, T 8, minibatches of 256.
-  json cfg = small_run(1024);
+  json cfg = small_ppo_run(1024);
   cfg["ppo"]["actor"]["hidden"] = {256, 160};
   cfg["ppo"]["critic"]["hidden"] = {256, 160};
   cfg["ppo"]["rollout_steps"] = 8;
@@ -476,7 +445,7 @@ TEST_CASE("ppo: a policy file acts exactly as the learner's policy", "[ppo]") {
   // Through the trainer: the final policy file, loaded from the run
   // directory, reproduces the run's final evaluation bit for bit.
   const std::string dir = tmp_dir("policy");
-  json cfg = small_run(400);
+  json cfg = small_ppo_run(400);
   cfg["train"]["algo"] = "ppo";
   const auto s = train(cfg, dir);
   const auto policy = atacom::TrainedPolicy::load(dir);

@@ -22,6 +22,7 @@
 #include "tests/push_env.hpp"
 #include "train/lagrangian_learner.hpp"
 #include "train/ppo.hpp"
+#include "tests/test_files.hpp"
 
 using nlohmann::json;
 using namespace atacom;
@@ -29,17 +30,6 @@ using atacom::testing::PushEnv;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string tmp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("atacom_ppolag_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
 
 // A filled rollout of T x N rows with random rewards, costs and episode ends.
 void fill(PpoRollout& r, Rng& rng) {
@@ -63,7 +53,7 @@ void fill(PpoRollout& r, Rng& rng) {
 // evaluates its deterministic action over 10 episodes; `max_multiplier`:
 // the largest multiplier during training (it may end at 0 once the policy
 // costs well below the budget).
-EvalResult train_push(const std::string& learner, int64_t batch_steps, double* max_multiplier = nullptr) {
+EvalResult train_ppo_on_push(const std::string& learner, int64_t batch_steps, double* max_multiplier = nullptr) {
   const int N = 16;
   PushEnv env(N), eval_env(10);
   env.seed(0);
@@ -202,8 +192,8 @@ TEST_CASE("ppo-lag run: files and keys, 1 and 2 threads and a resume inside a ro
 TEST_CASE("ppo-lag learns to cost below its budget where the only violation is avoidable, ppo does not",
           "[learning][lagrangian]") {
   double lambda = 0;  // the largest multiplier of the run
-  const EvalResult lag = train_push("ppo-lag", 2500, &lambda);
-  const EvalResult ppo = train_push("ppo", 2500);
+  const EvalResult lag = train_ppo_on_push("ppo-lag", 2500, &lambda);
+  const EvalResult ppo = train_ppo_on_push("ppo", 2500);
   INFO("ppo-lag: cost " << lag.cost_mean << " return " << lag.return_mean << " multiplier " << lambda
                         << "; ppo: cost " << ppo.cost_mean << " return " << ppo.return_mean);
   CHECK(ppo.cost_mean > 40);      // plain PPO pushes on: a > 0.5 nearly every step of 50

@@ -15,7 +15,7 @@ using namespace atacom;
 
 namespace {
 
-struct Shape { int n, m, k, p; };
+struct ProblemShape { int n, m, k, p; };
 
 // A random env: J entries ~ N(0, 1), G dense ~ N(0, 1), constraint values
 // drawn so rows range from deep inside (c = -3) to violated (c = +0.2), with
@@ -59,7 +59,7 @@ double max_abs_diff(const double* x, const double* y, int n) {
   return d;
 }
 
-ProjectorModel random_model(Rng& rng, Shape sh) {
+ProjectorModel random_model(Rng& rng, ProblemShape sh) {
   ProjectorModel mod = default_projector_model(sh.n, sh.m, sh.k, sh.p);
   for (int i = 0; i < sh.k; ++i) {
     mod.slack[i] = static_cast<SlackType>(rng.below(3));
@@ -70,14 +70,14 @@ ProjectorModel random_model(Rng& rng, Shape sh) {
   return mod;
 }
 
-const Shape kShapes[] = {{1, 1, 1, 0}, {2, 2, 1, 0}, {3, 2, 5, 2}, {4, 2, 3, 0}, {7, 7, 34, 0},
+const ProblemShape kShapes[] = {{1, 1, 1, 0}, {2, 2, 1, 0}, {3, 2, 5, 2}, {4, 2, 3, 0}, {7, 7, 34, 0},
                          {7, 7, 5, 3}, {6, 3, 12, 4}, {2, 2, 9, 1}, {14, 7, 20, 0}, {5, 5, 0, 0}};
 
 }  // namespace
 
 TEST_CASE("projector: fast kernel equals the per-env reference", "[projector]") {
   Rng rng(42, 0);
-  for (const Shape& sh : kShapes) {
+  for (const ProblemShape& sh : kShapes) {
     for (int variant = 0; variant < 4; ++variant) {
       const int gform = variant & 1;
       if (gform == 1 && sh.n != sh.m) continue;
@@ -118,7 +118,7 @@ TEST_CASE("projector: fast kernel equals the per-env reference", "[projector]") 
 
 TEST_CASE("projector: tangent basis annihilates J_u and the control keeps dc/dt on the manifold", "[projector]") {
   Rng rng(7, 1);
-  for (const Shape& sh : kShapes) {
+  for (const ProblemShape& sh : kShapes) {
     for (int basis = 0; basis < 2; ++basis) {
       ProjectorModel mod = random_model(rng, sh);
       mod.basis = basis ? BasisType::Smooth : BasisType::Projected;
@@ -187,8 +187,8 @@ TEST_CASE("projector: agreement at and beyond the boundary (slack at its floor)"
 
 TEST_CASE("projector: equality rows (general path) and the smooth basis equal the reference", "[projector]") {
   Rng rng(3, 3);
-  const Shape shapes[] = {{3, 3, 4, 0}, {7, 7, 12, 2}, {4, 2, 3, 1}, {6, 4, 8, 0}};
-  for (const Shape& sh : shapes) {
+  const ProblemShape shapes[] = {{3, 3, 4, 0}, {7, 7, 12, 2}, {4, 2, 3, 1}, {6, 4, 8, 0}};
+  for (const ProblemShape& sh : shapes) {
     for (int variant = 0; variant < 3; ++variant) {
       ProjectorModel mod = random_model(rng, sh);
       if (variant != 1) {  // equality rows in variants 0 and 2
@@ -419,9 +419,9 @@ TEST_CASE("projector: skipping the slack outputs changes nothing else", "[projec
 
 TEST_CASE("projector: correction-first bounds equal the reference and keep a inside the box", "[projector]") {
   Rng rng(31, 5);
-  const Shape shapes[] = {{7, 7, 34, 0}, {3, 2, 5, 2}, {4, 3, 6, 1}, {2, 2, 3, 0}};
+  const ProblemShape shapes[] = {{7, 7, 34, 0}, {3, 2, 5, 2}, {4, 3, 6, 1}, {2, 2, 3, 0}};
   int scaled = 0;
-  for (const Shape& sh : shapes) {
+  for (const ProblemShape& sh : shapes) {
     for (int variant = 0; variant < 4; ++variant) {
       ProjectorModel mod = random_model(rng, sh);
       for (int i = 0; i < sh.k; ++i) mod.tol[i] = 1e-3;  // agreement to 1e-9 needs a conditioned J_u

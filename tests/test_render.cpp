@@ -51,7 +51,7 @@ void check_self_contained(const std::string& html) {
   CHECK(html.find("//cdn") == std::string::npos);
 }
 
-int count(const std::string& s, const std::string& what) {
+int occurrences(const std::string& s, const std::string& what) {
   int n = 0;
   for (size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
   return n;
@@ -68,8 +68,8 @@ TEST_CASE("render: table episode without a safety layer ends at its terminal eve
   const RenderResult r = render_episode(c);
   check_self_contained(r.html);
   CHECK(r.html.rfind("<!DOCTYPE html>", 0) == 0);
-  CHECK(count(r.html, "<input type=\"range\" id=\"slider\"") == 1);
-  CHECK(count(r.html, "<div class=\"plot\"><svg") == 2);  // constraints and reward
+  CHECK(occurrences(r.html, "<input type=\"range\" id=\"slider\"") == 1);
+  CHECK(occurrences(r.html, "<div class=\"plot\"><svg") == 2);  // constraints and reward
   CHECK(r.html.find("id=\"views\"") != std::string::npos);
   const json d = page_data(r.html);
   REQUIRE(r.steps > 0);
@@ -221,8 +221,8 @@ TEST_CASE("render: the page's script runs in headless chromium", "[render][slow]
   std::filesystem::remove_all(dir);
   // The script drew the views (one SVG per view plus the two plots) and wrote the status of step 7.
   CHECK(std::regex_search(dom, std::regex("step +7 / " + std::to_string(r.steps))));
-  CHECK(count(dom, "<svg") == 4);
-  CHECK(count(dom, "class=\"link\"") >= 12);  // the link capsules in both views
+  CHECK(occurrences(dom, "<svg") == 4);
+  CHECK(occurrences(dom, "class=\"link\"") >= 12);  // the link capsules in both views
 }
 
 TEST_CASE("render: the constraint plot's range fits the data, boundary included", "[render]") {

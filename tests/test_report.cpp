@@ -19,17 +19,13 @@
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
 #include "tests/csv_rows.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace atacom;
 
 namespace {
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
 
 std::vector<std::map<std::string, std::string>> read_csv(const std::string& p) { return csv_rows::read(p); }
 
@@ -47,13 +43,13 @@ double ref_iqm(std::vector<double> v) {
   for (size_t i = k; i + k < v.size(); ++i) s += v[i];
   return s / double(v.size() - 2 * k);
 }
-uint64_t fnv(const std::string& s) {
+uint64_t fnv_text(const std::string& s) {
   uint64_t h = 14695981039346656037ull;
   for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
   return h;
 }
 std::pair<double, double> ref_ci(const std::vector<double>& v, int R, uint64_t seed, const std::string& key) {
-  Rng rng(seed, fnv(key));
+  Rng rng(seed, fnv_text(key));
   std::vector<double> st;
   for (int r = 0; r < R; ++r) {
     std::vector<double> s;
@@ -71,7 +67,7 @@ double ref_pi(const std::vector<double>& x, const std::vector<double>& y, bool h
 }
 std::pair<double, double> ref_pi_ci(const std::vector<double>& x, const std::vector<double>& y, bool higher, int R,
                                     uint64_t seed, const std::string& key) {
-  Rng rng(seed, fnv(key));
+  Rng rng(seed, fnv_text(key));
   std::vector<double> st;
   for (int r = 0; r < R; ++r) {
     std::vector<double> sx, sy;

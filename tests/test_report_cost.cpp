@@ -19,17 +19,14 @@
 #include "src/experiments/sweep_state.hpp"
 #include "tests/shell_run.hpp"
 #include "train/algorithms.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace atacom;
 
 namespace {
-std::string slurp(const std::string& p) {
-  std::ifstream f(p);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-size_t count(const std::string& s, const std::string& what) {
+size_t count_of(const std::string& s, const std::string& what) {
   size_t n = 0;
   for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
   return n;
@@ -110,16 +107,16 @@ TEST_CASE("report cost: cost metrics, the cost-return scatter, the training-cost
     CHECK(scatter.find(col) != std::string::npos);
     CHECK(curves.find(col) != std::string::npos);
     // named: under its box (besides the legend) and beside its IQM diamond
-    CHECK(count(box, ">" + a + "</text>") >= 2);
-    CHECK(count(scatter, ">" + a + "</text>") >= 2);
+    CHECK(count_of(box, ">" + a + "</text>") >= 2);
+    CHECK(count_of(scatter, ">" + a + "</text>") >= 2);
   }
   CHECK(colours.size() == algos.size());
   CHECK(algorithm_color("sac-lag") == algorithm_color("sac-lag"));
   CHECK(algorithm_color("some-new-algo").size() == 7);
   // The training-cost curves: the learners only (la does not train), a log axis (values in the thousands).
   CHECK(tcost.find("log scale") != std::string::npos);
-  CHECK(count(tcost, ">sac-lag</text>") >= 2);  // legend and the curve's end
-  CHECK(count(tcost, ">la</text>") == 1);        // the legend only
+  CHECK(count_of(tcost, ">sac-lag</text>") >= 2);  // legend and the curve's end
+  CHECK(count_of(tcost, ">la</text>") == 1);        // the legend only
   CHECK(scatter.find("(log scale)") != std::string::npos);  // training cost 0 .. 6000
   // The cost metrics are tables, boxes and P(improvement) rows.
   const std::string csv = slurp(rd + "summary.csv");
@@ -166,6 +163,6 @@ TEST_CASE("report cost: sac-lag and cbf-sac runs of a real sweep reach the repor
   for (const char* row : {"nav,sac-lag,train_cost,3,", "nav,cbf-sac,train_cost,3,", "nav,sac-lag,eval_cost_mean,3,",
                           "nav,cbf-sac,eval_cost_mean,3,"})
     CHECK(csv.find(row) != std::string::npos);
-  CHECK(count(slurp((rd / "train_cost_nav.svg").string()), ">cbf-sac</text>") >= 2);
+  CHECK(count_of(slurp((rd / "train_cost_nav.svg").string()), ">cbf-sac</text>") >= 2);
   fs::remove_all(dir);
 }

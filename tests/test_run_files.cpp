@@ -17,6 +17,8 @@
 #include "atacom/trainer.hpp"
 #include "run_dir_compare.hpp"
 #include "train/checkpoint.hpp"
+#include "tests/test_files.hpp"
+#include "tests/train_run.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -24,31 +26,10 @@ using namespace atacom;
 
 namespace {
 
-std::string tmp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("atacom_runfiles_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-
-json small_run(int64_t steps) {
+json small_sac_run(int64_t steps) {
   return {{"sac", {{"actor", {{"hidden", {16, 16}}}}, {"critic", {{"hidden", {16, 16}}}}, {"batch_size", 16},
                    {"initial_replay", 100}, {"warmup", 100}, {"replay_capacity", 2000}}},
           {"train", {{"env", "pendulum"}, {"steps", steps}, {"eval_every", 200}, {"eval_episodes", 2}, {"seed", 1}}}};
-}
-
-TrainSummary train(const json& cfg, const std::string& dir, bool resume = false, int64_t stop_after = 0,
-                   std::ostream* log = nullptr) {
-  TrainOptions o;
-  o.out_dir = dir;
-  o.resume = resume;
-  o.stop_after = stop_after;
-  o.log = log;
-  return run_training(resolve_run_config(cfg), o);
 }
 
 int cli(const std::string& args, const std::string& log) {
@@ -73,9 +54,9 @@ uint64_t u64_at(const std::string& s, size_t off) {
 
 TEST_CASE("run files: --resume refuses a missing directory, one without config.json, a lost checkpoint", "[run_files]") {
   const std::string dir = tmp_dir("resume"), log = dir + ".log";
-  CHECK_THROWS_WITH(train(small_run(400), dir, true), Catch::Contains("does not exist"));
+  CHECK_THROWS_WITH(train(small_sac_run(400), dir, true), Catch::Contains("does not exist"));
   fs::create_directories(dir);
-  CHECK_THROWS_WITH(train(small_run(400), dir, true), Catch::Contains("no config.json"));
+  CHECK_THROWS_WITH(train(small_sac_run(400), dir, true), Catch::Contains("no config.json"));
   // The command line too: before this change it trained the defaults (pendulum, 100k steps) silently.
   CHECK(cli("train --resume --out " + dir, log) != 0);
   CHECK(slurp(log).find("config.json") != std::string::npos);
@@ -84,20 +65,20 @@ TEST_CASE("run files: --resume refuses a missing directory, one without config.j
   CHECK(slurp(log).find("does not exist") != std::string::npos);
   fs::remove_all(dir);
   // A run with evaluations whose checkpoint.bin was deleted cannot continue bitwise: refused.
-  train(small_run(600), dir, false, 400);
+  train(small_sac_run(600), dir, false, 400);
   fs::remove(dir + "/checkpoint.bin");
-  CHECK_THROWS_WITH(train(small_run(600), dir, true), Catch::Contains("checkpoint.bin is missing") &&
+  CHECK_THROWS_WITH(train(small_sac_run(600), dir, true), Catch::Contains("checkpoint.bin is missing") &&
                                                          Catch::Contains("2 evaluation rows"));
   // Killed before its first checkpoint (config.json and the header only): restarts, and says so.
   fs::remove_all(dir);
-  train(small_run(600), dir, false, 100);
+  train(small_sac_run(600), dir, false, 100);
   fs::remove(dir + "/checkpoint.bin");
   std::ostringstream msg;
-  const TrainSummary s = train(small_run(600), dir, true, 0, &msg);
+  const TrainSummary s = train(small_sac_run(600), dir, true, 0, &msg);
   CHECK(msg.str().find("starting the run at step 0") != std::string::npos);
   CHECK(s.env_steps == 600);
   const std::string fresh = tmp_dir("resume_fresh");
-  CHECK(train(small_run(600), fresh).agent_hash == s.agent_hash);
+  CHECK(train(small_sac_run(600), fresh).agent_hash == s.agent_hash);
   fs::remove_all(fresh);
   fs::remove_all(dir);
   fs::remove(log);
@@ -105,7 +86,7 @@ TEST_CASE("run files: --resume refuses a missing directory, one without config.j
 
 TEST_CASE("run files: impossible checkpoint counters are refused by name, files left alone", "[run_files]") {
   const std::string dir = tmp_dir("counters");
-  train(small_run(600), dir, false, 300);
+  train(small_sac_run(600), dir, false, 300);
   const std::string ck = dir + "/checkpoint.bin", good = slurp(ck), csv = slurp(dir + "/progress.csv");
   const std::string payload = read_checkpoint(ck).payload;
   // payload: tag (4) | env_steps next_eval next_ckpt train_episodes train_terminations train_violations
@@ -124,21 +105,21 @@ TEST_CASE("run files: impossible checkpoint counters are refused by name, files 
                         Case{4 + 14 * 8, 5, "target_updates"}}) {
     INFO("field " << c.name);
     patch_checkpoint(ck, c.off, c.value);
-    CHECK_THROWS_WITH(train(small_run(600), dir, true), Catch::Contains(c.name));
+    CHECK_THROWS_WITH(train(small_sac_run(600), dir, true), Catch::Contains(c.name));
     CHECK(slurp(dir + "/progress.csv") == csv);  // the header and rows survive
     std::ofstream(ck, std::ios::binary | std::ios::trunc) << good;
   }
   patch_checkpoint(ck, learner, 1e18);
-  CHECK_THROWS_WITH(train(small_run(600), dir, true), Catch::Contains("budget"));
+  CHECK_THROWS_WITH(train(small_sac_run(600), dir, true), Catch::Contains("budget"));
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << good;
-  CHECK(train(small_run(600), dir, true).env_steps == 600);  // the untouched checkpoint still resumes
+  CHECK(train(small_sac_run(600), dir, true).env_steps == 600);  // the untouched checkpoint still resumes
   fs::remove_all(dir);
 }
 
 TEST_CASE("run files: a budget below what is done is refused, config.json and summary.json stay consistent", "[run_files]") {
   const std::string dir = tmp_dir("budget"), log = dir + ".log";
-  train(small_run(600), dir);
-  CHECK_THROWS_WITH(train(small_run(200), dir, true), Catch::Contains("below the 600 env steps"));
+  train(small_sac_run(600), dir);
+  CHECK_THROWS_WITH(train(small_sac_run(200), dir, true), Catch::Contains("below the 600 env steps"));
   CHECK(cli("train --resume --steps 100 --out " + dir, log) != 0);
   CHECK(slurp(log).find("below") != std::string::npos);
   CHECK(json::parse(slurp(dir + "/config.json"))["train"]["steps"] == 600);
@@ -152,12 +133,12 @@ TEST_CASE("run files: a budget below what is done is refused, config.json and su
 
 TEST_CASE("run files: a symlinked progress.csv is replaced on resume, never written through", "[run_files]") {
   const std::string dir = tmp_dir("symlink"), outside = dir + "_outside.csv";
-  train(small_run(600), dir, false, 300);
+  train(small_sac_run(600), dir, false, 300);
   const std::string rows = slurp(dir + "/progress.csv");
   std::ofstream(outside, std::ios::binary) << rows;
   fs::remove(dir + "/progress.csv");
   fs::create_symlink(outside, dir + "/progress.csv");
-  train(small_run(600), dir, true);
+  train(small_sac_run(600), dir, true);
   CHECK(slurp(outside) == rows);  // before this change the resume truncated and appended through the link
   CHECK(!fs::is_symlink(dir + "/progress.csv"));
   CHECK(slurp(dir + "/progress.csv").size() > rows.size());
@@ -184,7 +165,7 @@ TEST_CASE("run files: --config is a file for every subcommand, flags that do not
   CHECK(cli("rollout --env nav --atacom on --safety none --steps 100 --envs 2", log) != 0);
   CHECK(slurp(log).find("contradicts") != std::string::npos);
   // a trained policy: the run's env and layer; env overrides do not apply
-  json run = small_run(300);
+  json run = small_sac_run(300);
   run["train"]["env"] = "nav";
   run["train"]["algo"] = "atacom-sac";
   train(run, dir);
@@ -215,7 +196,7 @@ TEST_CASE("run files: killed with SIGKILL before any file write, train --resume 
           "[run_files]") {
   const std::string ref = tmp_dir("kill_ref"), dir = tmp_dir("kill"), cfg = tmp_dir("kill_cfg.json"),
                     log = tmp_dir("kill.log");
-  std::ofstream(cfg) << small_run(600).dump();
+  std::ofstream(cfg) << small_sac_run(600).dump();
   const std::string first = "--threads 1 train --config " + cfg + " --out ";
   REQUIRE(cli(first + ref, log) == 0);
   const auto want = run_dir_compare::files(ref, ref);

@@ -20,7 +20,7 @@
 using namespace atacom;
 
 namespace {
-int info_col(const EnvSpec& s, const std::string& name) {
+int info_column_or_none(const EnvSpec& s, const std::string& name) {
   const auto it = std::find(s.info_names.begin(), s.info_names.end(), name);
   return it == s.info_names.end() ? -1 : static_cast<int>(it - s.info_names.begin());
 }
@@ -49,9 +49,9 @@ TEST_CASE("safelayer env: wraps table, shelf and nav, info columns agree with th
     REQUIRE(sl != nullptr);
     const EnvSpec& s = env->spec();
     REQUIRE(s.act_dim == sl->inner().spec().act_dim);
-    const int ccorr = info_col(s, "safelayer_correction"), cact = info_col(s, "safelayer_active"),
-              cit = info_col(s, "safelayer_iterations"), cinf = info_col(s, "safelayer_infeasible"),
-              cmax = info_col(s, "max_constraint");
+    const int ccorr = info_column_or_none(s, "safelayer_correction"), cact = info_column_or_none(s, "safelayer_active"),
+              cit = info_column_or_none(s, "safelayer_iterations"), cinf = info_column_or_none(s, "safelayer_infeasible"),
+              cmax = info_column_or_none(s, "max_constraint");
     REQUIRE(std::min({ccorr, cact, cit, cinf, cmax}) >= 0);
     CHECK(sl->model().dt == s.dt);
     Rng rng(3, 0);

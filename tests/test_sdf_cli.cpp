@@ -19,30 +19,30 @@ namespace fs = std::filesystem;
 
 namespace {
 using Result = ShellResult;
-Result atacom_cli(const std::string& args) { return run_shell(std::string(ATACOM_ATACOM_EXE) + " " + args + " 2>&1"); }
+Result sdf_cli(const std::string& args) { return run_shell(std::string(ATACOM_ATACOM_EXE) + " " + args + " 2>&1"); }
 }  // namespace
 
 TEST_CASE("sdf cli: --sdf learned runs hri with the learned human, and is refused with --policy trained, --resume, nav", "[redsdf][cli]") {
-  const Result ok = atacom_cli("--threads 1 rollout --env hri --policy random --steps 800 --envs 8 --seed 2 --sdf learned");
+  const Result ok = sdf_cli("--threads 1 rollout --env hri --policy random --steps 800 --envs 8 --seed 2 --sdf learned");
   INFO(ok.out);
   REQUIRE(ok.rc == 0);
   const auto j = nlohmann::json::parse(ok.out.substr(ok.out.find('{')));
   CHECK(j["steps"] == 800);
   CHECK(j["nonfinite_constraints"] == 0);
 
-  const Result trained = atacom_cli("rollout --policy trained --run /nonexistent/run --sdf learned");
+  const Result trained = sdf_cli("rollout --policy trained --run /nonexistent/run --sdf learned");
   CHECK(trained.rc != 0);
   CHECK_THAT(trained.out, Catch::Contains("--sdf does not apply to --policy trained"));
 
   const fs::path dir = fs::temp_directory_path() / ("atacom_sdf_cli_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::ofstream(dir / "config.json") << "{}\n";
-  const Result resume = atacom_cli("train --resume --out " + dir.string() + " --sdf learned");
+  const Result resume = sdf_cli("train --resume --out " + dir.string() + " --sdf learned");
   fs::remove_all(dir);
   CHECK(resume.rc != 0);
   CHECK_THAT(resume.out, Catch::Contains("--sdf cannot be combined with --resume"));
 
-  const Result nav = atacom_cli("rollout --env nav --policy random --steps 10 --envs 1 --sdf learned");
+  const Result nav = sdf_cli("rollout --env nav --policy random --steps 10 --envs 1 --sdf learned");
   CHECK(nav.rc != 0);
   CHECK_THAT(nav.out, Catch::Contains("no field with a shipped learned model"));
 
@@ -51,7 +51,7 @@ TEST_CASE("sdf cli: --sdf learned runs hri with the learned human, and is refuse
 TEST_CASE("sdf cli: sdf-train --object tiago writes a body model, a bad body file stops rollout before any step", "[redsdf][cli]") {
   const fs::path dir = fs::temp_directory_path() / ("atacom_sdf_tiago_" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  const Result tiago = atacom_cli("--threads 1 sdf-train --object tiago --out " + (dir / "m").string() +
+  const Result tiago = sdf_cli("--threads 1 sdf-train --object tiago --out " + (dir / "m").string() +
                                   " --epochs 1 --surface-points 2 --hidden 16,16,16 --batch 256 --quiet");
   INFO(tiago.out);
   REQUIRE(tiago.rc == 0);
@@ -63,7 +63,7 @@ TEST_CASE("sdf cli: sdf-train --object tiago writes a body model, a bad body fil
   for (const char* f : {"redsdf.bin", "progress.csv", "learning_curve.svg", "config.json"}) CHECK(fs::exists(dir / "m" / f));
 
   std::ofstream(dir / "bad.json") << R"({"sdf": {"tiago": "learned:)" << (dir / "missing").string() << "\"}}\n";
-  const Result bad = atacom_cli("rollout --env shelf --policy random --steps 10 --envs 1 --config " + (dir / "bad.json").string());
+  const Result bad = sdf_cli("rollout --env shelf --policy random --steps 10 --envs 1 --config " + (dir / "bad.json").string());
   fs::remove_all(dir);
   CHECK(bad.rc != 0);
   CHECK_THAT(bad.out, Catch::Contains("cannot be opened"));

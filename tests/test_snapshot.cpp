@@ -22,7 +22,7 @@ constexpr uint32_t kTagTest = snapshot_tag("TEST");
 constexpr uint32_t kTagA = snapshot_tag("AAAA");
 constexpr uint32_t kTagB = snapshot_tag("BBBB");
 
-std::string sample() {
+std::string snapshot_sample() {
   SnapshotWriter w(kTagTest, "test");
   bin::write_vec(w.section(kTagA), std::vector<double>{1.0, 2.0, 3.0});
   bin::write_pod<int32_t>(w.section(kTagB), 7);
@@ -31,8 +31,8 @@ std::string sample() {
   return out.str();
 }
 
-// Reads sample()'s layout back.
-void read_sample(const std::string& bytes, uint32_t env = kTagTest) {
+// Reads snapshot_sample()'s layout back.
+void read_snapshot_sample(const std::string& bytes, uint32_t env = kTagTest) {
   std::istringstream in(bytes);
   SnapshotReader r(in, env, "test");
   std::vector<double> v;
@@ -59,27 +59,27 @@ void drive(BatchEnv& env, Rng& rng, int steps) {
 }  // namespace
 
 TEST_CASE("snapshot format: round trip, and bad input refused by name", "[snapshot]") {
-  const std::string good = sample();
-  read_sample(good);
+  const std::string good = snapshot_sample();
+  read_snapshot_sample(good);
   // Layout: u32 magic, u32 env, u32 version, u64 length, sections, u64 checksum.
   REQUIRE(good.size() == 20 + (12 + 8 + 24) + (12 + 4) + 8);
 
   for (size_t cut : {size_t(0), size_t(3), size_t(12), size_t(19), size_t(20), good.size() / 2, good.size() - 1}) {
     INFO("cut at " << cut);
-    REQUIRE_THROWS_WITH(read_sample(good.substr(0, cut)), Catch::Contains("test snapshot: truncated"));
+    REQUIRE_THROWS_WITH(read_snapshot_sample(good.substr(0, cut)), Catch::Contains("test snapshot: truncated"));
   }
-  REQUIRE_THROWS_WITH(read_sample(good, snapshot_tag("ELSE")), Catch::Contains("holds env 'TEST', this env is 'ELSE'"));
+  REQUIRE_THROWS_WITH(read_snapshot_sample(good, snapshot_tag("ELSE")), Catch::Contains("holds env 'TEST', this env is 'ELSE'"));
   std::string magic = good;
   magic[0] = 'X';
-  REQUIRE_THROWS_WITH(read_sample(magic), Catch::Contains("not an env snapshot"));
+  REQUIRE_THROWS_WITH(read_snapshot_sample(magic), Catch::Contains("not an env snapshot"));
   std::string version = good;
   version[8] = 9;
-  REQUIRE_THROWS_WITH(read_sample(version), Catch::Contains("format version 9"));
+  REQUIRE_THROWS_WITH(read_snapshot_sample(version), Catch::Contains("format version 9"));
   for (size_t at : {size_t(20), size_t(30), good.size() - 12, good.size() - 1}) {  // section header, data, checksum
     INFO("flipped byte " << at);
     std::string flipped = good;
     flipped[at] ^= 0x04;
-    REQUIRE_THROWS_WITH(read_sample(flipped), Catch::Contains("checksum mismatch"));
+    REQUIRE_THROWS_WITH(read_snapshot_sample(flipped), Catch::Contains("checksum mismatch"));
   }
 
   // Intact snapshots (valid checksums) whose sections do not match the reader.
@@ -113,7 +113,7 @@ TEST_CASE("snapshot format: round trip, and bad input refused by name", "[snapsh
   std::string huge = good;
   const uint64_t n = uint64_t{1} << 40;
   std::memcpy(&huge[12], &n, 8);
-  REQUIRE_THROWS_WITH(read_sample(huge), Catch::Contains("truncated"));
+  REQUIRE_THROWS_WITH(read_snapshot_sample(huge), Catch::Contains("truncated"));
 }
 
 TEST_CASE("snapshot format: every env restores bitwise and refuses others' snapshots", "[snapshot]") {

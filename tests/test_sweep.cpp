@@ -18,23 +18,13 @@
 #include "run_dir_compare.hpp"
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace atacom;
 
 namespace {
-
-std::string tmp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("atacom_sweep_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
 
 json small_spec() {
   return json::parse(R"({"envs": ["table"], "algos": ["sac", "atacom-sac", "la"], "seeds": [0, 1], "steps": 2000,

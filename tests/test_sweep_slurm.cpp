@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "src/experiments/sweep_slurm.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -29,11 +30,6 @@ fs::path fresh_dir(const std::string& name) {
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
 
 void write_exe(const fs::path& p, const std::string& text) {

@@ -26,7 +26,7 @@ Eigen::Matrix3d m3(const nlohmann::json& j) {
     for (int c = 0; c < 3; ++c) R(r, c) = j[r][c];
   return R;
 }
-ArmQ random_q(const TiagoArmModel& m, Rng& rng) {
+ArmQ random_joint_q(const TiagoArmModel& m, Rng& rng) {
   ArmQ q;
   for (int j = 0; j < kArmJoints; ++j) q(j) = rng.uniform(m.lower[j], m.upper[j]);
   return q;
@@ -70,7 +70,7 @@ TEST_CASE("arm Jacobians match central finite differences", "[kinematics]") {
   Rng rng(7, 0);
   const double h = 1e-6;
   for (int trial = 0; trial < 20; ++trial) {
-    const ArmQ q = random_q(m, rng);
+    const ArmQ q = random_joint_q(m, rng);
     const ArmFkResult r = arm_fk_reference(m, q);
     for (int j = 0; j < kArmJoints; ++j) {
       ArmQ qp = q, qm = q;
@@ -93,7 +93,7 @@ TEST_CASE("batched SIMD FK equals the scalar reference", "[kinematics]") {
   const int N = 21;  // not a multiple of the lane width
   std::vector<double> q(N * kArmJoints);
   for (int e = 0; e < N; ++e) {
-    const ArmQ qe = random_q(m, rng);
+    const ArmQ qe = random_joint_q(m, rng);
     for (int j = 0; j < kArmJoints; ++j) q[e * kArmJoints + j] = qe(j);
   }
   ArmFkBatch b;
@@ -130,7 +130,7 @@ TEST_CASE("PoI cover radii cover every capsule part", "[kinematics]") {
         const double t = part.t0 + (part.t1 - part.t0) * s / 10.0;
         const Eigen::Vector3d x = cap.a + t * (cap.b - cap.a);
         for (int trial = 0; trial < 50; ++trial) {
-          const ArmFkResult r = arm_fk_reference(m, random_q(m, rng));
+          const ArmFkResult r = arm_fk_reference(m, random_joint_q(m, rng));
           const Eigen::Vector3d xw = r.frame[cap.frame].apply(x);
           INFO(cap.name << " t=" << t << " poi " << m.poi[part.poi].name);
           CHECK((xw - r.poi[part.poi]).norm() + cap.radius <= m.scene_cover[part.poi] + 1e-12);
@@ -156,7 +156,7 @@ TEST_CASE("PoI spheres marked inside a capsule stay inside it", "[kinematics]") 
   for (const ArmPoi& p : m.poi) marked += p.inside_capsule;
   CHECK(marked >= 3);
   for (int trial = 0; trial < 500; ++trial) {
-    const ArmFkResult r = arm_fk_reference(m, random_q(m, rng));
+    const ArmFkResult r = arm_fk_reference(m, random_joint_q(m, rng));
     for (int i = 0; i < kArmPoi; ++i) {
       if (!m.poi[i].inside_capsule) continue;
       double best = 1e9;

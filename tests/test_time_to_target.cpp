@@ -18,25 +18,16 @@
 #include "atacom/trainer.hpp"
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
+#include "tests/test_files.hpp"
+#include "tests/train_run.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
 
-std::string tmp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("atacom_ttt_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-
 // progress.csv as cells (an empty last cell kept).
-struct Csv {
+struct ProgressCsv {
   std::vector<std::string> head;
   std::vector<std::vector<std::string>> rows;
   size_t col(const std::string& name) const {
@@ -57,8 +48,8 @@ std::vector<std::string> cells(const std::string& line) {
     at = comma + 1;
   }
 }
-Csv read_progress(const std::string& dir) {
-  Csv c;
+ProgressCsv read_progress(const std::string& dir) {
+  ProgressCsv c;
   std::istringstream in(slurp(dir + "/progress.csv"));
   std::string line;
   std::getline(in, line);
@@ -70,7 +61,7 @@ Csv read_progress(const std::string& dir) {
   return c;
 }
 // Every row without its wall-clock cells (wall_s, time_to_target_s).
-std::vector<std::string> rows_without_wall(const Csv& c) {
+std::vector<std::string> rows_without_wall(const ProgressCsv& c) {
   std::vector<std::string> out;
   for (const auto& r : c.rows) {
     std::string s;
@@ -95,14 +86,6 @@ json table_run(int64_t steps, double target) {
                    {"initial_replay", 100}, {"warmup", 100}, {"replay_capacity", 5000}}},
           {"train", {{"env", "table"}, {"algo", "sac"}, {"steps", steps}, {"num_envs", 2}, {"eval_every", 100},
                      {"eval_episodes", 2}, {"seed", 3}}}};
-}
-
-atacom::TrainSummary train(const json& cfg, const std::string& dir, bool resume = false, int64_t stop_after = 0) {
-  atacom::TrainOptions o;
-  o.out_dir = dir;
-  o.resume = resume;
-  o.stop_after = stop_after;
-  return atacom::run_training(atacom::resolve_run_config(cfg), o);
 }
 
 atacom::EnvSpec spec_of(const std::string& env, const json& config = json::object()) {
@@ -187,7 +170,7 @@ TEST_CASE("time to target: the first evaluation that meets it, null when never, 
   CHECK(sn["eval_wall_s"].get<double>() > 0);
   CHECK(sn["eval_share"].get<double>() > 0);
   CHECK(sn["eval_share"].get<double>() < 1);
-  const Csv a = read_progress(never);
+  const ProgressCsv a = read_progress(never);
   REQUIRE(a.rows.size() == size_t(steps / 100));
   for (size_t r = 0; r < a.rows.size(); ++r)
     for (const char* k : {"time_to_target_s", "steps_to_target", "updates_to_target", "train_cost_to_target"})
@@ -214,7 +197,7 @@ TEST_CASE("time to target: the first evaluation that meets it, null when never, 
   const json cfg = table_run(steps, target);
   const std::string full = tmp_dir("full");
   train(cfg, full);
-  const Csv b = read_progress(full);
+  const ProgressCsv b = read_progress(full);
   REQUIRE(b.rows.size() == a.rows.size());
   for (size_t r = 0; r < b.rows.size(); ++r) CHECK(b.at(r, "final_distance") == a.at(r, "final_distance"));
   const json sb = json::parse(slurp(full + "/summary.json"));
@@ -262,7 +245,7 @@ TEST_CASE("time to target: the first evaluation that meets it, null when never, 
   const atacom::TrainSummary ss = train(stop_cfg, stop);
   CHECK(ss.stopped_at_target);
   CHECK(ss.env_steps == met_at);
-  const Csv c = read_progress(stop);
+  const ProgressCsv c = read_progress(stop);
   REQUIRE(c.rows.size() == m + 1);
   const auto rb = rows_without_wall(b), rc = rows_without_wall(c);
   for (size_t r = 0; r <= m; ++r) CHECK(rc[r] == rb[r]);

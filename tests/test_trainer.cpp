@@ -17,22 +17,13 @@
 #include "atacom/trainer.hpp"
 #include "src/core/binary_io.hpp"
 #include "train/checkpoint.hpp"
+#include "tests/test_files.hpp"
+#include "tests/train_run.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-std::string tmp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("atacom_trainer_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
 
 // A small, quick pendulum run: updates start at 200 transitions.
 json small_run(int64_t steps) {
@@ -56,14 +47,6 @@ std::string progress_without_wall(const std::string& dir) {
     out += "\n";
   }
   return out;
-}
-
-atacom::TrainSummary train(const json& cfg, const std::string& dir, bool resume = false, int64_t stop_after = 0) {
-  atacom::TrainOptions o;
-  o.out_dir = dir;
-  o.resume = resume;
-  o.stop_after = stop_after;
-  return atacom::run_training(atacom::resolve_run_config(cfg), o);
 }
 
 }  // namespace

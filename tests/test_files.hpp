@@ -1,0 +1,50 @@
+// The file helpers many tests share, defined once: reading a whole file,
+// naming a fresh temporary directory, a progress.csv without its clock. One
+// definition each also lets the test files compile together in one
+// translation unit (CMake's unity build, tests/CMakeLists.txt).
+#pragma once
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <vector>
+
+// The whole file, bytes as stored; empty when it cannot be opened.
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+// <temp>/atacom_test_<pid>_<name>, removed if it exists (not created): unique
+// to this process, so tests running side by side never share a directory.
+inline std::string tmp_dir(const std::string& name) {
+  const auto p = std::filesystem::temp_directory_path() / ("atacom_test_" + std::to_string(::getpid()) + "_" + name);
+  std::filesystem::remove_all(p);
+  return p.string();
+}
+
+// A progress.csv's text without its wall-clock columns (wall_s,
+// time_to_target_s), every other cell kept (empty ones too): what two runs of
+// the same config must agree on byte for byte.
+inline std::string without_wall(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string line, out;
+  std::vector<std::string> head;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    for (size_t at = 0;;) {
+      const size_t comma = line.find(',', at);
+      cells.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
+      if (comma == std::string::npos) break;
+      at = comma + 1;
+    }
+    if (head.empty()) head = cells;
+    for (size_t k = 0; k < cells.size(); ++k)
+      if (k >= head.size() || (head[k] != "wall_s" && head[k] != "time_to_target_s")) out += cells[k] + ",";
+    out += "\n";
+  }
+  return out;
+}
