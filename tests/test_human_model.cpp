@@ -16,20 +16,16 @@
 #include "envs/arm/human_model.hpp"
 #include "kernels/human_kernels.hpp"
 #include "src/core/data_dir.hpp"
+#include "tests/loaded_human.hpp"
 
 using namespace atacom;
 using Eigen::Vector3d;
 
 namespace {
 
-const HumanModel& model() {
-  static const HumanModel m = load_human_model();
-  return m;
-}
-
 // A random pose inside the joint limits, root anywhere near the table.
 HumanPose random_pose(Rng& rng) {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   HumanPose p{};
   p[0] = rng.uniform(0.5, 2.0);
   p[1] = rng.uniform(-1.0, 1.0);
@@ -94,7 +90,7 @@ nlohmann::json read(const std::string& name) {
 }  // namespace
 
 TEST_CASE("human model loads the skeleton: 20 joints, 16 capsules, 34 angles", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   REQUIRE(m.joints.size() == 20);
   REQUIRE(m.capsules.size() == 16);
   REQUIRE(m.dofs.size() == 34);
@@ -107,7 +103,7 @@ TEST_CASE("human model loads the skeleton: 20 joints, 16 capsules, 34 angles", "
 }
 
 TEST_CASE("human neutral pose reproduces the skeleton file, root pose moves it rigidly", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   HumanPose p{};
   HumanFkResult fk = human_fk_reference(m, p.data());
   for (int c = 0; c < kHumanCapsules; ++c) {
@@ -125,7 +121,7 @@ TEST_CASE("human neutral pose reproduces the skeleton file, root pose moves it r
 }
 
 TEST_CASE("human angle signs: flexion forward, abduction outward, knee backward, lean forward", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   const double h = 1.5707963267948966;
   auto tip_of = [&](const char* dof, double angle, const char* capsule) {
     HumanPose p{};
@@ -154,7 +150,7 @@ TEST_CASE("human angle signs: flexion forward, abduction outward, knee backward,
 }
 
 TEST_CASE("human reference FK matches an independent per-capsule chain", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   const nlohmann::json sk = read("human_skeleton.json"), dj = read("human_dofs.json");
   Rng rng(7, 0);
   double worst = 0;
@@ -170,7 +166,7 @@ TEST_CASE("human reference FK matches an independent per-capsule chain", "[human
 }
 
 TEST_CASE("human capsule velocities are the time derivatives of the positions", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   Rng rng(8, 0);
   const double h = 1e-6;
   double worst = 0;
@@ -194,7 +190,7 @@ TEST_CASE("human capsule velocities are the time derivatives of the positions", 
 }
 
 TEST_CASE("human capsule lane kernel matches the reference FK for every env of a range", "[human]") {
-  const HumanModel& m = model();
+  const HumanModel& m = human_model();
   Rng rng(9, 0);
   const int N = 21;  // two full lane blocks and a partial one
   HumanBatch B(N);

@@ -21,15 +21,11 @@
 #include "envs/arm/tiago_model.hpp"
 #include "src/core/data_dir.hpp"
 #include "kernels/sdf.hpp"
+#include "tests/loaded_human.hpp"
 
 using namespace atacom;
 
 namespace {
-
-const HumanModel& human_model() {
-  static const HumanModel m = load_human_model();
-  return m;
-}
 
 const HumanMotionLibrary& library() {
   static const HumanMotionLibrary lib = load_default_human_motion();

@@ -18,21 +18,17 @@
 #include "envs/arm/arm_fk_lanes.hpp"
 #include "kernels/human_fk_lanes.hpp"
 #include "kernels/human_rows_lanes.hpp"
+#include "tests/loaded_human.hpp"
 
 using namespace atacom;
 using Eigen::Vector3d;
 
 namespace {
 
-const HumanModel& rows_human_model() {
-  static const HumanModel m = load_human_model();
-  return m;
-}
-
 Vector3d rand_vec(Rng& rng, double r) { return {rng.uniform(-r, r), rng.uniform(-r, r), rng.uniform(-r, r)}; }
 
 HumanPose half_range_pose(Rng& rng) {
-  const HumanModel& m = rows_human_model();
+  const HumanModel& m = human_model();
   HumanPose p{};
   p[0] = rng.uniform(0.6, 1.0);
   p[1] = rng.uniform(-0.3, 0.3);
@@ -93,7 +89,7 @@ TEST_CASE("human capsule distance matches dense sampling, its gradient finite di
 }
 
 TEST_CASE("human smooth minimum: within its bound below the exact min, exact when one capsule is nearest", "[human]") {
-  const HumanModel& m = rows_human_model();
+  const HumanModel& m = human_model();
   Rng rng(12, 0);
   CHECK(human_smooth_min_error_bound(0.02) == Approx(15 * 0.02 / 4));
   for (const double k : {0.01, 0.04}) {
@@ -187,7 +183,7 @@ TEST_CASE("segment-segment distance matches brute force, also for points and par
 }
 
 TEST_CASE("human rows kernel matches the scalar reference for every env of a range", "[human]") {
-  const HumanModel& m = rows_human_model();
+  const HumanModel& m = human_model();
   Rng rng(14, 0);
   const int N = 19, P = 9, nq = 7;
   std::vector<double> delta(P);
@@ -233,7 +229,7 @@ TEST_CASE("human rows kernel matches the scalar reference for every env of a ran
 }
 
 TEST_CASE("human contact kernel matches the golden-section reference", "[human]") {
-  const HumanModel& m = rows_human_model();
+  const HumanModel& m = human_model();
   Rng rng(15, 0);
   const int N = 40, n_items = 5;
   HumanBatch B(N);
@@ -281,7 +277,7 @@ TEST_CASE("human contact kernel matches the golden-section reference", "[human]"
 }
 
 TEST_CASE("human rows: J_x xdot is the time derivative of the rows along replayed motion, robot still", "[human]") {
-  const HumanModel& m = rows_human_model();
+  const HumanModel& m = human_model();
   const HumanMotionLibrary lib = load_default_human_motion();
   const TiagoArmModel arm = load_tiago_arm_model(0.3);
   // The reference's HRI start: torso 0.3, right arm [0, 0, pi/2, pi/2, pi/2, 0, 0].
@@ -343,7 +339,7 @@ TEST_CASE("human rows: J_x xdot is the time derivative of the rows along replaye
 TEST_CASE("human rows fused with the arm's FK lanes equal the range kernel on the same inputs", "[human]") {
   // The path an env takes: pose lanes -> human_fk_lanes -> human_rows_lanes
   // on the arm's ArmFkLanes (PoIs and Jacobians), without going through memory.
-  const HumanModel& m = rows_human_model();
+  const HumanModel& m = human_model();
   const TiagoArmModel arm = load_tiago_arm_model(0.3);
   const lanes::ArmFkConst ak(arm);
   Rng rng(16, 0);

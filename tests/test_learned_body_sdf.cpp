@@ -17,6 +17,7 @@
 #include "src/core/data_dir.hpp"
 #include "train/sdf_path_accuracy.hpp"
 #include "train/sdf_tiago_data.hpp"
+#include "tests/near.hpp"
 
 using namespace atacom;
 
@@ -39,10 +40,6 @@ std::shared_ptr<LearnedObstacle> random_body_field(float lift) {
   o->batch = std::make_shared<RedsdfBatch>(*m);
   o->pose = {lift};
   return o;
-}
-
-bool near_abs_rel_body(double a, double b, double abs_tol, double rel) {
-  return std::abs(a - b) <= abs_tol + rel * std::max(std::abs(a), std::abs(b));
 }
 
 // The body's field as given, every other field analytic (hri's default is learned).
@@ -142,7 +139,7 @@ TEST_CASE("learned body lanes: grad_p d matches central finite differences, the 
       for (int i = 0; i < npoi; ++i)
         for (int l = 0; l < L; ++l) {
           ++total;
-          bad += !near_abs_rel_body((dp[i][l] - dm[i][l]) / (2 * h), g[i][r][l], 2e-3, 1e-2);
+          bad += !near_abs_rel((dp[i][l] - dm[i][l]) / (2 * h), g[i][r][l], 2e-3, 1e-2);
         }
     }
     INFO(bad << " of " << total << " gradient entries off");

@@ -21,6 +21,7 @@
 #include "kernels/human_rows_lanes.hpp"
 #include "kernels/redsdf_human_lanes.hpp"
 #include "train/sdf_human_data.hpp"
+#include "tests/near.hpp"
 
 using namespace atacom;
 
@@ -46,11 +47,6 @@ std::shared_ptr<LearnedHuman> random_human_field() {
 
 // The learned human's margin as the env applied it (model manifest).
 double le_margin_of(const ArmEnv& env) { return load_arm_learned_human(env.config().sdf)->margin; }
-
-// |a - b| within abs or rel of the larger magnitude.
-bool near_abs_rel(double a, double b, double abs_tol, double rel) {
-  return std::abs(a - b) <= abs_tol + rel * std::max(std::abs(a), std::abs(b));
-}
 
 }  // namespace
 
