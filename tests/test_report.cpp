@@ -124,7 +124,7 @@ TEST_CASE("report: statistics at known values", "[report]") {
 TEST_CASE("report: the numbers equal a direct computation from the run files", "[report]") {
   const std::string dir = (fs::temp_directory_path() / ("atacom_report_" + std::to_string(::getpid()))).string();
   fs::remove_all(dir);
-  const json spec_json = json::parse(R"({"envs": ["table"], "algos": ["sac", "atacom-sac", "la"],
+  const json spec_json = json::parse(R"({"envs": ["table"], "algos": ["sac", "atacom-sac", "la", "la-atacom"],
                                         "seeds": [0, 1, 2, 3, 4, 5], "steps": 3000})");
   const SweepSpec spec = parse_sweep_spec(spec_json);
   save_or_check_spec(dir, spec);
@@ -138,7 +138,7 @@ TEST_CASE("report: the numbers equal a direct computation from the run files", "
       write_cell_state(dir, c, {{"state", "failed"}, {"exit_code", 3}, {"attempts", 1}});
       continue;
     }
-    const double s = double(c.seed), a = c.algo == "sac" ? 0 : c.algo == "atacom-sac" ? 1 : 2;
+    const double s = double(c.seed), a = c.algo == "sac" ? 0 : c.algo == "atacom-sac" ? 1 : c.algo == "la" ? 2 : 3;
     json sm = {{"env_steps", c.learns ? 3000 : 0},
                {"eval_discounted_return_mean", -100 + 17 * a - 3 * s * s + 0.25 * s},
                {"eval_return_mean", -300 + 40 * a + 7 * s},
@@ -166,7 +166,7 @@ TEST_CASE("report: the numbers equal a direct computation from the run files", "
   o.resamples = 500;
   o.seed = 11;
   const ReportResult res = write_report(o);
-  REQUIRE(res.finished == 16);
+  REQUIRE(res.finished == 22);
   REQUIRE(res.missing == std::vector<std::string>{"table-sac-seed5", "table-atacom-sac-seed4"});
 
   const auto rows = read_csv(dir + "/report/summary.csv");
@@ -190,23 +190,27 @@ TEST_CASE("report: the numbers equal a direct computation from the run files", "
     REQUIRE(close(r.at("iqm_ci_high"), ci.second));
     ++checked;
   }
-  REQUIRE(checked == 3 * 11);
+  REQUIRE(checked == 4 * 11);
 
   const auto pis = read_csv(dir + "/report/prob_improvement.csv");
-  REQUIRE(pis.size() == 2 * 6);
+  // atacom-sac against the 3 others, then the other source through ATACOM against itself without: la-atacom vs la.
+  REQUIRE(pis.size() == 4 * 6);
   for (const auto& p : pis) {
-    INFO(p.at("baseline") << " " << p.at("metric"));
+    INFO(p.at("algo") << " " << p.at("baseline") << " " << p.at("metric"));
+    const std::string algo = p.at("algo");
+    REQUIRE((algo == "atacom-sac" || (algo == "la-atacom" && p.at("baseline") == "la")));
     const std::string k = p.at("metric");
     REQUIRE(k != "avg_episode_steps");  // the boxplot's episode steps are the training average
     const bool higher = k == "eval_discounted_return_mean" || k == "train_avg_episode_steps";
-    const auto& x = want.at("atacom-sac").at(k);
+    const auto& x = want.at(algo).at(k);
     const auto& y = want.at(p.at("baseline")).at(k);
     double wins = 0;
     for (double a : x)
       for (double b : y) wins += (higher ? a > b : a < b) ? 1.0 : a == b ? 0.5 : 0.0;
     REQUIRE(p.at("n_algo") == std::to_string(x.size()));
     REQUIRE(close(p.at("p_improvement"), wins / double(x.size() * y.size())));
-    const auto pci = ref_pi_ci(x, y, higher, 500, 11, "table/" + k + "/improvement/" + p.at("baseline"));
+    const auto pci = ref_pi_ci(x, y, higher, 500, 11,
+                               "table/" + k + "/improvement/" + p.at("baseline") + (algo == "atacom-sac" ? "" : "/by/" + algo));
     REQUIRE(close(p.at("p_ci_low"), pci.first));
     REQUIRE(close(p.at("p_ci_high"), pci.second));
     REQUIRE(std::stod(p.at("p_ci_low")) <= std::stod(p.at("p_improvement")));
@@ -225,7 +229,10 @@ TEST_CASE("report: the numbers equal a direct computation from the run files", "
   for (const char* ref : {"src=", "href=", "<script", "<link", "url("}) REQUIRE(html.find(ref) == std::string::npos);
   REQUIRE(html.find("<svg") != std::string::npos);
   REQUIRE(html.find("table-atacom-sac-seed4") != std::string::npos);
-  REQUIRE(slurp(dir + "/report/summary.md").find("table-sac-seed5") != std::string::npos);
+  const std::string md = slurp(dir + "/report/summary.md");
+  REQUIRE(md.find("table-sac-seed5") != std::string::npos);
+  REQUIRE(md.find("P(la-atacom improves on the baseline)") != std::string::npos);
+  REQUIRE(html.find("<h3>P(la-atacom improves on the baseline)</h3>") != std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -15,6 +15,7 @@
 #include "src/experiments/report_data.hpp"
 #include "src/experiments/report_shelf_real.hpp"
 #include "src/experiments/report_stats.hpp"
+#include "train/algorithms.hpp"
 
 namespace fs = std::filesystem;
 
@@ -73,7 +74,7 @@ struct Row {
 };
 
 struct Pi {
-  std::string env, metric, baseline;
+  std::string env, metric, algo, baseline;
   size_t nx = 0, ny = 0;
   double p = NAN;
   Interval ci{NAN, NAN};  // 95 % bootstrap interval of p
@@ -122,27 +123,49 @@ std::vector<Row> table_rows(const ReportData& d, bool censored) {
   return rows;
 }
 
+// The pairs P(improvement) is formed for: the main algorithm against every
+// other one, then every other source through ATACOM against the same source
+// without a layer when both ran (the paper's "ATACOM improves LA": la-atacom
+// vs la). Names not in the algorithm table form no second pair.
+std::vector<std::pair<std::string, std::string>> improvement_pairs(const ReportData& d) {
+  std::vector<std::pair<std::string, std::string>> out;
+  const std::string main = main_algorithm(d);
+  if (main.empty()) return out;
+  const auto ran = [&](const std::string& a) { return std::find(d.algos.begin(), d.algos.end(), a) != d.algos.end(); };
+  for (const auto& base : d.algos)
+    if (base != main) out.emplace_back(main, base);
+  for (const auto& algo : d.algos) {
+    if (algo == main) continue;
+    for (const Algorithm& a : algorithms()) {
+      if (a.name != algo || a.safety != SafetyLayer::Atacom) continue;
+      for (const Algorithm& b : algorithms())
+        if (b.source == a.source && b.learner == a.learner && b.safety == SafetyLayer::None && ran(b.name))
+          out.emplace_back(algo, b.name);
+    }
+  }
+  return out;
+}
+
 std::vector<Pi> improvements(const ReportData& d) {
   std::vector<Pi> out;
   const std::string main = main_algorithm(d);
-  if (main.empty()) return out;
   for (const auto& env : d.envs)
-    for (const auto& base : d.algos) {
-      if (base == main) continue;
+    for (const auto& [algo, base] : improvement_pairs(d))
       for (const ReportMetric& m : report_metrics()) {
         if (!m.boxplot && !m.censored) continue;
-        const std::vector<double> x = metric_values(d, env, main, m.key), y = metric_values(d, env, base, m.key);
+        const std::vector<double> x = metric_values(d, env, algo, m.key), y = metric_values(d, env, base, m.key);
         if (x.empty() || y.empty()) continue;
         const bool enough = x.size() >= kMinSeeds && y.size() >= kMinSeeds;
-        Pi p{env, m.key, base, x.size(), y.size()};
+        Pi p{env, m.key, algo, base, x.size(), y.size()};
         if (enough) {
           p.p = probability_of_improvement(x, y, m.higher_better);
-          p.ci = bootstrap_improvement_ci(x, y, m.higher_better, d.opts.resamples, d.opts.seed,
-                                          bootstrap_stream(env + "/" + m.key + "/improvement/" + base));
+          // The main algorithm keeps the streams it had before the other pairs were added.
+          std::string stream = env + "/" + m.key + "/improvement/" + base;
+          if (algo != main) stream.append("/by/").append(algo);
+          p.ci = bootstrap_improvement_ci(x, y, m.higher_better, d.opts.resamples, d.opts.seed, bootstrap_stream(stream));
         }
         out.push_back(p);
       }
-    }
   return out;
 }
 
@@ -191,7 +214,8 @@ std::string methods_text(const ReportData& d) {
               ? std::string("P(improvement): not formed (neither atacom-sac nor atacom-ppo ran). ")
               : "P(improvement) of " + main + " over a baseline: Mann-Whitney form, over all seed pairs 1 if " + main +
                     " is better, 1/2 if equal, with a 95% percentile-bootstrap interval (both algorithms' "
-                    "seeds resampled). ") +
+                    "seeds resampled); the same for every other source through ATACOM over that source without a "
+                    "layer, when both ran (la-atacom over la). ") +
          "Final-policy metrics are the last evaluation; "
          "training metrics count over all training steps. Cost: a step costs 1 when a constraint row exceeds its "
          "stated tolerance or a collision / joint-limit event happens (Safety-Gymnasium's convention); eval_cost_mean "
@@ -345,7 +369,9 @@ std::string seed_list_text(const std::vector<int64_t>& seeds) {
   for (size_t i = 0; i < seeds.size();) {
     size_t j = i;
     while (j + 1 < seeds.size() && seeds[j + 1] == seeds[j] + 1) ++j;
-    out += (out.empty() ? "" : ",") + std::to_string(seeds[i]) + (j > i ? "-" + std::to_string(seeds[j]) : "");
+    if (!out.empty()) out += ',';
+    out += std::to_string(seeds[i]);
+    if (j > i) out.append(1, '-').append(std::to_string(seeds[j]));
     i = j + 1;
   }
   return out;
@@ -399,9 +425,8 @@ ReportResult write_report(const ReportOptions& opts) {
             num(r.ci.high) + "\n";
   write_file_atomic(out("time_to_target.csv"), tcsv);
   std::string pcsv = "env,metric,algo,baseline,n_algo,n_baseline,p_improvement,p_ci_low,p_ci_high\n";
-  const std::string main = main_algorithm(d);
   for (const Pi& p : pis)
-    pcsv += p.env + "," + p.metric + "," + main + "," + p.baseline + "," + std::to_string(p.nx) + "," +
+    pcsv += p.env + "," + p.metric + "," + p.algo + "," + p.baseline + "," + std::to_string(p.nx) + "," +
             std::to_string(p.ny) + "," + num_or_empty(p.p) + "," + num_or_empty(p.ci.low) + "," +
             num_or_empty(p.ci.high) + "\n";
   write_file_atomic(out("prob_improvement.csv"), pcsv);
@@ -497,15 +522,17 @@ ReportResult write_report(const ReportOptions& opts) {
       md << "\n" << target_methods_text() << "\n\n";
       html << "</table><p class=\"note\">" << html_escape(target_methods_text()) << "</p>\n";
     }
-    bool any = false;
-    for (const Pi& p : pis) any = any || p.env == env;
-    if (any) {
-      const std::string main = main_algorithm(d);
-      md << "P(" << main << " improves on the baseline):\n\n| baseline | metric | n | P(improvement) [95% CI] |\n|---|---|---|---|\n";
-      html << "<h3>P(" << main << " improves on the baseline)</h3><table><tr><th>baseline</th><th>metric</th>"
-              "<th>n (" << main << ", baseline)</th><th>P(improvement) [95% CI]</th></tr>\n";
+    // One table per algorithm that improves on baselines here: the main one, then each source through ATACOM.
+    std::vector<std::string> improvers;
+    for (const Pi& p : pis)
+      if (p.env == env && std::find(improvers.begin(), improvers.end(), p.algo) == improvers.end())
+        improvers.push_back(p.algo);
+    for (const std::string& algo : improvers) {
+      md << "P(" << algo << " improves on the baseline):\n\n| baseline | metric | n | P(improvement) [95% CI] |\n|---|---|---|---|\n";
+      html << "<h3>P(" << algo << " improves on the baseline)</h3><table><tr><th>baseline</th><th>metric</th>"
+              "<th>n (" << algo << ", baseline)</th><th>P(improvement) [95% CI]</th></tr>\n";
       for (const Pi& p : pis) {
-        if (p.env != env) continue;
+        if (p.env != env || p.algo != algo) continue;
         const bool enough = std::min(p.nx, p.ny) >= kMinSeeds;
         const std::string pv = enough ? short_num(p.p) + " [" + short_num(p.ci.low) + ", " + short_num(p.ci.high) + "]"
                                       : no_stat(std::min(p.nx, p.ny), "P(improvement)");

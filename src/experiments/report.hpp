@@ -4,7 +4,8 @@
 //                         (metric = the summary.json key; "best.<key>" for the best evaluation)
 //   time_to_target.csv    env, algo, metric, n, reached, median, q1, q3, iqm, iqm_ci_low, iqm_ci_high for
 //                         the censored metrics (time_to_target_s, ...; "inf": not reached, see below)
-//   prob_improvement.csv  env, metric, algo, baseline, n_algo, n_baseline, p_improvement (ATACOM-SAC vs each)
+//   prob_improvement.csv  env, metric, algo, baseline, n_algo, n_baseline, p_improvement (ATACOM-SAC vs each,
+//                         then each other source through ATACOM vs the same source without: la-atacom vs la)
 //   final_vs_best.csv     per run: final and best evaluation side by side, drop = 1 when the final one fell far
 //   missing.csv           cells without a finished run: state and log
 //   shelf_real.csv        (sweeps with shelf runs) every finished shelf policy through the ShelfEnvReal
