@@ -1,10 +1,12 @@
-// The file helpers many tests share, defined once: reading a whole file,
-// naming a fresh temporary directory, a progress.csv without its clock. One
-// definition each also lets the test files compile together in one
-// translation unit (CMake's unity build, tests/CMakeLists.txt).
+// The file and text helpers many tests share, defined once: reading a whole
+// file, naming a fresh temporary directory, a progress.csv without its clock,
+// counting a string's occurrences. One definition each also lets the test
+// files compile together in one translation unit (CMake's unity build,
+// tests/CMakeLists.txt).
 #pragma once
 #include <unistd.h>
 
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -47,4 +49,11 @@ inline std::string without_wall(const std::string& csv) {
     out += "\n";
   }
   return out;
+}
+
+// How often `what` occurs in `text` (overlapping matches counted).
+inline size_t occurrences(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
 }

@@ -7,16 +7,11 @@
 #include <unistd.h>
 
 #include "train/progress_svg.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-
-size_t count(const std::string& s, const std::string& what) {
-  size_t n = 0;
-  for (size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
-  return n;
-}
 
 atacom::ProgressFile progress(const std::vector<std::string>& cols, const std::vector<std::vector<double>>& rows) {
   const std::string path = (fs::temp_directory_path() / ("atacom_progress_svg_" + std::to_string(::getpid()) + ".csv")).string();
@@ -42,13 +37,13 @@ TEST_CASE("progress.svg: return, final distance, training and evaluation safety 
   for (const char* title : {"evaluation return", "final distance to the goal", "training: collisions and violations",
                             "evaluation: collisions and violations per episode"})
     CHECK(svg.find(title) != std::string::npos);
-  CHECK(count(svg, "<svg") == 5);  // the outer image and four panels
+  CHECK(occurrences(svg, "<svg") == 5);  // the outer image and four panels
   // legends name every series of the safety panels
   for (const char* series : {"collisions", "wall_collisions", "violations (steps)"}) CHECK(svg.find(series) != std::string::npos);
   // a NaN point is skipped: the final-distance curve has two dots, not three
   const size_t fd = svg.find("final distance to the goal");
   const std::string panel = svg.substr(fd, svg.find("</svg>", fd) - fd);
-  CHECK(count(panel, "<circle") == 2);
+  CHECK(occurrences(panel, "<circle") == 2);
   CHECK(svg.find("nan") == std::string::npos);
 }
 
@@ -56,7 +51,7 @@ TEST_CASE("progress.svg: an env without constraints or a goal gets the return pa
   const auto p = progress({"env_steps", "eval_return_mean", "eval_return_std", "violations", "train_violations"},
                           {{300, -1200, 100, 0, 0}, {600, -900, 80, 0, 0}});
   const std::string svg = atacom::progress_svg("pendulum", p, false);
-  CHECK(count(svg, "<svg") == 2);
+  CHECK(occurrences(svg, "<svg") == 2);
   CHECK(svg.find("evaluation return") != std::string::npos);
   CHECK(svg.find("violations") == std::string::npos);
 }

@@ -19,6 +19,7 @@
 
 #include "atacom/trainer.hpp"
 #include "src/experiments/render.hpp"
+#include "tests/test_files.hpp"
 
 using namespace atacom;
 using nlohmann::json;
@@ -49,12 +50,6 @@ void check_self_contained(const std::string& html) {
   CHECK(html.find("url(") == std::string::npos);
   CHECK(html.find("@import") == std::string::npos);
   CHECK(html.find("//cdn") == std::string::npos);
-}
-
-int occurrences(const std::string& s, const std::string& what) {
-  int n = 0;
-  for (size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
-  return n;
 }
 
 }  // namespace

@@ -25,13 +25,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace atacom;
 
-namespace {
-size_t count_of(const std::string& s, const std::string& what) {
-  size_t n = 0;
-  for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
-  return n;
-}
-}  // namespace
 
 TEST_CASE("report cost: sac-lag and cbf-sac through a sweep spec, with per-cell sections", "[report][sweep]") {
   const SweepSpec spec = parse_sweep_spec(json::parse(R"({
@@ -107,16 +100,16 @@ TEST_CASE("report cost: cost metrics, the cost-return scatter, the training-cost
     CHECK(scatter.find(col) != std::string::npos);
     CHECK(curves.find(col) != std::string::npos);
     // named: under its box (besides the legend) and beside its IQM diamond
-    CHECK(count_of(box, ">" + a + "</text>") >= 2);
-    CHECK(count_of(scatter, ">" + a + "</text>") >= 2);
+    CHECK(occurrences(box, ">" + a + "</text>") >= 2);
+    CHECK(occurrences(scatter, ">" + a + "</text>") >= 2);
   }
   CHECK(colours.size() == algos.size());
   CHECK(algorithm_color("sac-lag") == algorithm_color("sac-lag"));
   CHECK(algorithm_color("some-new-algo").size() == 7);
   // The training-cost curves: the learners only (la does not train), a log axis (values in the thousands).
   CHECK(tcost.find("log scale") != std::string::npos);
-  CHECK(count_of(tcost, ">sac-lag</text>") >= 2);  // legend and the curve's end
-  CHECK(count_of(tcost, ">la</text>") == 1);        // the legend only
+  CHECK(occurrences(tcost, ">sac-lag</text>") >= 2);  // legend and the curve's end
+  CHECK(occurrences(tcost, ">la</text>") == 1);        // the legend only
   CHECK(scatter.find("(log scale)") != std::string::npos);  // training cost 0 .. 6000
   // The cost metrics are tables, boxes and P(improvement) rows.
   const std::string csv = slurp(rd + "summary.csv");
@@ -163,6 +156,6 @@ TEST_CASE("report cost: sac-lag and cbf-sac runs of a real sweep reach the repor
   for (const char* row : {"nav,sac-lag,train_cost,3,", "nav,cbf-sac,train_cost,3,", "nav,sac-lag,eval_cost_mean,3,",
                           "nav,cbf-sac,eval_cost_mean,3,"})
     CHECK(csv.find(row) != std::string::npos);
-  CHECK(count_of(slurp((rd / "train_cost_nav.svg").string()), ">cbf-sac</text>") >= 2);
+  CHECK(occurrences(slurp((rd / "train_cost_nav.svg").string()), ">cbf-sac</text>") >= 2);
   fs::remove_all(dir);
 }
