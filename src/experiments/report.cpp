@@ -179,13 +179,14 @@ std::vector<Drop> drops(const ReportData& d) {
     x.best_steps = metric_value(r.summary, "best.env_steps").value_or(NAN);
     x.final_dist = metric_value(r.summary, "final_distance").value_or(NAN);
     x.best_dist = metric_value(r.summary, "best.final_distance").value_or(NAN);
-    // The return's scale is what the run gained over its first evaluation: a
-    // tenth of |best| misfires near a best of 0 (0.61 -> 0.34 at 0.04 m).
-    // Without a curve, |best| stands in for the gain.
+    // The return's scale: the larger of |best| and what the run gained over
+    // its first evaluation. |best| alone misfires near a best of 0 (0.61 ->
+    // 0.34 at 0.04 m after a climb from -500); the gain alone never flags a
+    // run that collapsed without first improving.
     const auto first = std::find_if(r.eval_return.begin(), r.eval_return.end(), [](double v) { return std::isfinite(v); });
-    const double first_ret = first == r.eval_return.end() ? NAN : *first;
-    const double scale = std::isfinite(first_ret) ? x.best_ret - first_ret : std::abs(x.best_ret);
-    x.dropped = (scale > 0 && x.final_ret < x.best_ret - d.opts.drop_return_frac * scale) ||
+    const double gain = first == r.eval_return.end() ? 0.0 : x.best_ret - *first;
+    const double scale = std::max(std::abs(x.best_ret), gain);
+    x.dropped = (x.final_ret < x.best_ret - d.opts.drop_return_frac * scale) ||
                 (x.final_dist > x.best_dist + d.opts.drop_distance);
     out.push_back(x);
   }
@@ -229,9 +230,9 @@ std::string methods_text(const ReportData& d) {
          "log10(1 + cost) when its largest value is 100 or more; the training cost until the quality target is "
          "the time-to-target figure's train_cost_to_target (collisions + violating steps, so a step with both "
          "counts twice there and once in train_cost). Colours are fixed per algorithm in every figure. A run is "
-         "flagged when its final evaluation return fell back by more than " +
-         short_num(100 * d.opts.drop_return_frac) + "% of what its best evaluation had gained over its first (best - "
-         "first), or its final distance is more than " + short_num(d.opts.drop_distance) + " m above the best's.";
+         "flagged when its final evaluation return is more than " + short_num(100 * d.opts.drop_return_frac) +
+         "% of max(|best|, best - first evaluation's) below its best evaluation's, or its final distance more than " +
+         short_num(d.opts.drop_distance) + " m above the best's.";
 }
 
 // What a sweep with fewer than kMinSeeds seeds per cell can and cannot show ("" with enough seeds).

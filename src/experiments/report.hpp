@@ -47,9 +47,9 @@ struct ReportOptions {
   int curve_resamples = 500;    // of the learning-curve bands (one interval per evaluation)
   uint64_t seed = 0;            // bootstrap seed
   // A run's final evaluation "fell far below its best" when its return is
-  // below best - drop_return_frac * (best - first evaluation's return; |best|
-  // without a curve), or its final distance above the best evaluation's by
-  // more than drop_distance (metres).
+  // below best - drop_return_frac * max(|best|, best - first evaluation's
+  // return), or its final distance above the best evaluation's by more than
+  // drop_distance (metres).
   double drop_return_frac = 0.1;
   double drop_distance = 0.2;
   // Only these seeds' cells (ascending, no repeats; empty: every cell), e.g.
