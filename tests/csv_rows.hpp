@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/run_dir_compare.hpp"
+#include "tests/test_files.hpp"
 
 namespace csv_rows {
 
@@ -22,7 +22,7 @@ inline std::vector<std::string> split(const std::string& line) {
 }
 
 inline std::vector<std::map<std::string, std::string>> read(const std::filesystem::path& p) {
-  std::istringstream in(run_dir_compare::slurp(p.string()));
+  std::istringstream in(slurp(p.string()));
   std::string line;
   std::getline(in, line);
   const std::vector<std::string> head = split(line);

@@ -16,12 +16,9 @@
 
 #include <nlohmann/json.hpp>
 
-namespace run_dir_compare {
+#include "tests/test_files.hpp"
 
-inline std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
+namespace run_dir_compare {
 
 inline std::string comparable(const std::filesystem::path& p) {
   const std::string name = p.filename().string();

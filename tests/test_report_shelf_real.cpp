@@ -18,6 +18,7 @@
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
 #include "tests/csv_rows.hpp"
+#include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -103,7 +104,7 @@ TEST_CASE("report: every finished shelf policy goes through the ShelfEnvReal pro
     CHECK(std::stod(lr[t].at("success_rate")) == Approx(la_want.targets[t].success_rate).epsilon(1e-11));
     CHECK(lr[t].at("collisions") == "0");
   }
-  const std::string md = run_dir_compare::slurp((dir / "report/summary.md").string());
+  const std::string md = slurp(dir / "report/summary.md");
   CHECK(md.find("## ShelfEnvReal") != std::string::npos);
   CHECK(md.find("| la-atacom | atacom | 1 (deterministic) |") != std::string::npos);
   CHECK(md.find("| atacom-sac | atacom | 2 | ") != std::string::npos);

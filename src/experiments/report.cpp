@@ -126,22 +126,18 @@ std::vector<Row> table_rows(const ReportData& d, bool censored) {
 // The pairs P(improvement) is formed for: the main algorithm against every
 // other one, then every other source through ATACOM against the same source
 // without a layer when both ran (the paper's "ATACOM improves LA": la-atacom
-// vs la). Names not in the algorithm table form no second pair.
+// vs la).
 std::vector<std::pair<std::string, std::string>> improvement_pairs(const ReportData& d) {
   std::vector<std::pair<std::string, std::string>> out;
   const std::string main = main_algorithm(d);
   if (main.empty()) return out;
-  const auto ran = [&](const std::string& a) { return std::find(d.algos.begin(), d.algos.end(), a) != d.algos.end(); };
   for (const auto& base : d.algos)
     if (base != main) out.emplace_back(main, base);
   for (const auto& algo : d.algos) {
-    if (algo == main) continue;
-    for (const Algorithm& a : algorithms()) {
-      if (a.name != algo || a.safety != SafetyLayer::Atacom) continue;
-      for (const Algorithm& b : algorithms())
-        if (b.source == a.source && b.learner == a.learner && b.safety == SafetyLayer::None && ran(b.name))
-          out.emplace_back(algo, b.name);
-    }
+    const Algorithm& a = find_algorithm(algo);
+    if (algo == main || a.safety != SafetyLayer::Atacom) continue;
+    const std::string& bare = algorithm_for(a.source, a.learner, SafetyLayer::None).name;
+    if (std::find(d.algos.begin(), d.algos.end(), bare) != d.algos.end()) out.emplace_back(algo, bare);
   }
   return out;
 }
