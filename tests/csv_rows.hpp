@@ -13,22 +13,14 @@
 
 namespace csv_rows {
 
-inline std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out(1);
-  for (char c : line)
-    if (c == ',') out.emplace_back();
-    else out.back() += c;
-  return out;
-}
-
 inline std::vector<std::map<std::string, std::string>> read(const std::filesystem::path& p) {
   std::istringstream in(slurp(p.string()));
   std::string line;
   std::getline(in, line);
-  const std::vector<std::string> head = split(line);
+  const std::vector<std::string> head = csv_cells(line);
   std::vector<std::map<std::string, std::string>> rows;
   while (std::getline(in, line)) {
-    const std::vector<std::string> f = split(line);
+    const std::vector<std::string> f = csv_cells(line);
     REQUIRE(f.size() == head.size());
     std::map<std::string, std::string> r;
     for (size_t i = 0; i < f.size(); ++i) r[head[i]] = f[i];

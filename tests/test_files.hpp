@@ -1,8 +1,8 @@
 // The file and text helpers many tests share, defined once: reading a whole
-// file, naming a fresh temporary directory, a progress.csv without its clock,
-// counting a string's occurrences. One definition each also lets the test
-// files compile together in one translation unit (CMake's unity build,
-// tests/CMakeLists.txt).
+// file, naming a fresh temporary directory, a CSV line's cells, a
+// progress.csv without its clock, counting a string's occurrences. One
+// definition each also lets the test files compile together in one
+// translation unit (CMake's unity build, tests/CMakeLists.txt).
 #pragma once
 #include <unistd.h>
 
@@ -28,6 +28,15 @@ inline std::string tmp_dir(const std::string& name) {
   return p.string();
 }
 
+// A CSV line's cells, empty ones kept (an empty last one too): n commas, n + 1 cells.
+inline std::vector<std::string> csv_cells(const std::string& line) {
+  std::vector<std::string> out(1);
+  for (char c : line)
+    if (c == ',') out.emplace_back();
+    else out.back() += c;
+  return out;
+}
+
 // A progress.csv's text without its wall-clock columns (wall_s,
 // time_to_target_s), every other cell kept (empty ones too): what two runs of
 // the same config must agree on byte for byte.
@@ -36,13 +45,7 @@ inline std::string without_wall(const std::string& csv) {
   std::string line, out;
   std::vector<std::string> head;
   while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    for (size_t at = 0;;) {
-      const size_t comma = line.find(',', at);
-      cells.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
-      if (comma == std::string::npos) break;
-      at = comma + 1;
-    }
+    const std::vector<std::string> cells = csv_cells(line);
     if (head.empty()) head = cells;
     for (size_t k = 0; k < cells.size(); ++k)
       if (k >= head.size() || (head[k] != "wall_s" && head[k] != "time_to_target_s")) out += cells[k] + ",";
