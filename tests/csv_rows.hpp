@@ -1,5 +1,7 @@
-// A report CSV as rows of column name -> cell text: every cell, empty ones
-// included (an empty last cell too), and every row as wide as the header.
+// A CSV (a report's, a run's progress.csv) read two ways: rows of column name
+// -> cell text, or a header and rows of cells looked up by column name. Every
+// cell is kept, empty ones included (an empty last cell too), and every row
+// must be as wide as the header.
 #pragma once
 #include <catch2/catch.hpp>
 
@@ -13,17 +15,39 @@
 
 namespace csv_rows {
 
-inline std::vector<std::map<std::string, std::string>> read(const std::filesystem::path& p) {
+// The header and the rows of cells.
+struct Table {
+  std::vector<std::string> head;
+  std::vector<std::vector<std::string>> rows;
+  size_t col(const std::string& name) const {
+    for (size_t c = 0; c < head.size(); ++c)
+      if (head[c] == name) return c;
+    FAIL("no column " << name);
+    return 0;
+  }
+  const std::string& at(size_t row, const std::string& name) const { return rows.at(row).at(col(name)); }
+  double num(size_t row, const std::string& name) const { return std::stod(at(row, name)); }
+};
+
+inline Table read_table(const std::filesystem::path& p) {
+  Table t;
   std::istringstream in(slurp(p.string()));
   std::string line;
   std::getline(in, line);
-  const std::vector<std::string> head = csv_cells(line);
-  std::vector<std::map<std::string, std::string>> rows;
+  t.head = csv_cells(line);
   while (std::getline(in, line)) {
-    const std::vector<std::string> f = csv_cells(line);
-    REQUIRE(f.size() == head.size());
+    t.rows.push_back(csv_cells(line));
+    REQUIRE(t.rows.back().size() == t.head.size());
+  }
+  return t;
+}
+
+inline std::vector<std::map<std::string, std::string>> read(const std::filesystem::path& p) {
+  const Table t = read_table(p);
+  std::vector<std::map<std::string, std::string>> rows;
+  for (const auto& f : t.rows) {
     std::map<std::string, std::string> r;
-    for (size_t i = 0; i < f.size(); ++i) r[head[i]] = f[i];
+    for (size_t i = 0; i < f.size(); ++i) r[t.head[i]] = f[i];
     rows.push_back(r);
   }
   return rows;

@@ -9,6 +9,7 @@
 
 #include "build_kind.hpp"
 #include "envs/arm/arm_env.hpp"
+#include "src/core/binary_io.hpp"
 #include "atacom/env_registry.hpp"
 #include "atacom/make_env.hpp"
 #include "atacom/parallel.hpp"
@@ -28,22 +29,16 @@ std::array<double, kArmJoints> random_q(const TiagoArmModel& m, Rng& rng, double
   return q;
 }
 
-uint64_t fnv_step(uint64_t h, const void* data, size_t n) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
-  return h;
-}
-
 uint64_t state_hash(const ArmEnv& env) {
   const EnvBuffers& b = env.buffers();
-  uint64_t h = 0xcbf29ce484222325ull;
-  h = fnv_step(h, env.q().data(), env.q().size() * sizeof(double));
-  h = fnv_step(h, env.goal().data(), env.goal().size() * sizeof(double));
-  h = fnv_step(h, b.obs.data(), b.obs.size() * sizeof(float));
-  h = fnv_step(h, b.reward.data(), b.reward.size() * sizeof(float));
-  h = fnv_step(h, b.constraints.data(), b.constraints.size() * sizeof(double));
-  h = fnv_step(h, b.terminated.data(), b.terminated.size());
-  h = fnv_step(h, b.info.data(), b.info.size() * sizeof(float));
+  uint64_t h = atacom::bin::kFnv1aSeed;
+  h = atacom::bin::fnv1a(env.q().data(), env.q().size() * sizeof(double), h);
+  h = atacom::bin::fnv1a(env.goal().data(), env.goal().size() * sizeof(double), h);
+  h = atacom::bin::fnv1a(b.obs.data(), b.obs.size() * sizeof(float), h);
+  h = atacom::bin::fnv1a(b.reward.data(), b.reward.size() * sizeof(float), h);
+  h = atacom::bin::fnv1a(b.constraints.data(), b.constraints.size() * sizeof(double), h);
+  h = atacom::bin::fnv1a(b.terminated.data(), b.terminated.size(), h);
+  h = atacom::bin::fnv1a(b.info.data(), b.info.size() * sizeof(float), h);
   return h;
 }
 

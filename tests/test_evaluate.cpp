@@ -20,6 +20,7 @@
 #include "train/run_files.hpp"
 #include "train/sac_learner.hpp"
 #include "build_kind.hpp"
+#include "tests/csv_rows.hpp"
 #include "tests/test_files.hpp"
 
 namespace fs = std::filesystem;
@@ -43,33 +44,6 @@ constexpr bool kFixtureBuild = false;
 #endif
 
 bool same(double a, double b) { return kFixtureBuild ? a == b : a == Approx(b).epsilon(1e-4).margin(1e-6); }
-
-// progress.csv as a header and rows of cells.
-struct Csv {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-  std::string cell(size_t row, const std::string& col) const {
-    for (size_t c = 0; c < header.size(); ++c)
-      if (header[c] == col) return rows.at(row).at(c);
-    FAIL("no column " << col);
-    return "";
-  }
-};
-Csv read_csv(const fs::path& p) {
-  Csv csv;
-  std::istringstream in(slurp(p));
-  std::string line;
-  bool first = true;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::istringstream ls(line);
-    for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
-    if (first) csv.header = cells;
-    else csv.rows.push_back(cells);
-    first = false;
-  }
-  return csv;
-}
 
 }  // namespace
 
@@ -104,12 +78,12 @@ TEST_CASE("evaluate: reproduces the numbers the pre-seam SAC trainer wrote for a
     }
     if (!kFixtureBuild) continue;
     // and the last progress row the same numbers to 9 digits.
-    const Csv csv = read_csv(dir / "progress.csv");
+    const csv_rows::Table csv = csv_rows::read_table(dir / "progress.csv");
     const size_t last = csv.rows.size() - 1;
-    CHECK(ProgressFile::format(r.return_mean) == csv.cell(last, "eval_return_mean"));
-    CHECK(ProgressFile::format(r.return_std) == csv.cell(last, "eval_return_std"));
-    CHECK(ProgressFile::format(r.violations) == csv.cell(last, "violations"));
-    for (size_t c = 0; c < r.info_names.size(); ++c) CHECK(ProgressFile::format(r.info[c]) == csv.cell(last, r.info_names[c]));
+    CHECK(ProgressFile::format(r.return_mean) == csv.at(last, "eval_return_mean"));
+    CHECK(ProgressFile::format(r.return_std) == csv.at(last, "eval_return_std"));
+    CHECK(ProgressFile::format(r.violations) == csv.at(last, "violations"));
+    for (size_t c = 0; c < r.info_names.size(); ++c) CHECK(ProgressFile::format(r.info[c]) == csv.at(last, r.info_names[c]));
   }
 }
 
@@ -131,13 +105,13 @@ TEST_CASE("evaluate: training through the learner contract is the pre-seam traje
     const json old = json::parse(slurp(src / "summary.json"));
     CHECK(s.summary["agent_hash"] == old["agent_hash"]);
     CHECK(s.updates == old["updates"].get<int64_t>());
-    const Csv a = read_csv(src / "progress.csv"), b = read_csv(fs::path(out) / "progress.csv");
+    const csv_rows::Table a = csv_rows::read_table(src / "progress.csv"), b = csv_rows::read_table(fs::path(out) / "progress.csv");
     REQUIRE(a.rows.size() == b.rows.size());
     for (size_t r = 0; r < a.rows.size(); ++r)
-      for (const std::string& col : a.header)
+      for (const std::string& col : a.head)
         if (col != "wall_s") {
           INFO("row " << r << " column " << col);
-          CHECK(a.cell(r, col) == b.cell(r, col));
+          CHECK(a.at(r, col) == b.at(r, col));
         }
     fs::remove_all(out);
   }

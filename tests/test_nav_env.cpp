@@ -12,6 +12,7 @@
 #include "atacom/env_registry.hpp"
 #include "atacom/make_env.hpp"
 #include "envs/nav/nav_env.hpp"
+#include "src/core/binary_io.hpp"
 #include "src/core/data_dir.hpp"
 #include "atacom/parallel.hpp"
 #include "atacom/projector.hpp"
@@ -22,14 +23,9 @@ using namespace atacom;
 
 namespace {
 
-uint64_t fnv_bytes(uint64_t h, const void* p, size_t n) {
-  const auto* b = static_cast<const unsigned char*>(p);
-  for (size_t i = 0; i < n; ++i) { h ^= b[i]; h *= 1099511628211ull; }
-  return h;
-}
 template <class T>
 uint64_t fnv_rows(uint64_t h, const std::vector<T>& v, size_t row, int i) {
-  return fnv_bytes(h, v.data() + row * i, row * sizeof(T));
+  return atacom::bin::fnv1a(v.data() + row * i, row * sizeof(T), h);
 }
 
 // Hash of env i's complete state and last outputs.
@@ -54,7 +50,7 @@ uint64_t env_hash(const NavEnv& env, int i) {
   h = fnv_rows(h, b.constraints, kNavConstraints, i);
   h = fnv_rows(h, b.info, kNavInfoCount, i);
   const Rng::State r = s.rng[i].state();
-  h = fnv_bytes(h, r.s, sizeof(r.s));
+  h = atacom::bin::fnv1a(r.s, sizeof(r.s), h);
   return h;
 }
 

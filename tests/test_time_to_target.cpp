@@ -18,6 +18,7 @@
 #include "atacom/trainer.hpp"
 #include "src/experiments/sweep_spec.hpp"
 #include "src/experiments/sweep_state.hpp"
+#include "tests/csv_rows.hpp"
 #include "tests/test_files.hpp"
 #include "tests/train_run.hpp"
 
@@ -26,40 +27,8 @@ using nlohmann::json;
 
 namespace {
 
-// progress.csv as cells (an empty last cell kept).
-struct ProgressCsv {
-  std::vector<std::string> head;
-  std::vector<std::vector<std::string>> rows;
-  size_t col(const std::string& name) const {
-    for (size_t c = 0; c < head.size(); ++c)
-      if (head[c] == name) return c;
-    FAIL("no column " << name);
-    return 0;
-  }
-  std::string at(size_t row, const std::string& name) const { return rows.at(row).at(col(name)); }
-  double num(size_t row, const std::string& name) const { return std::stod(at(row, name)); }
-};
-std::vector<std::string> cells(const std::string& line) {
-  std::vector<std::string> out;
-  for (size_t at = 0;;) {
-    const size_t comma = line.find(',', at);
-    out.push_back(line.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
-    if (comma == std::string::npos) return out;
-    at = comma + 1;
-  }
-}
-ProgressCsv read_progress(const std::string& dir) {
-  ProgressCsv c;
-  std::istringstream in(slurp(dir + "/progress.csv"));
-  std::string line;
-  std::getline(in, line);
-  c.head = cells(line);
-  while (std::getline(in, line)) {
-    c.rows.push_back(cells(line));
-    REQUIRE(c.rows.back().size() == c.head.size());
-  }
-  return c;
-}
+using ProgressCsv = csv_rows::Table;
+ProgressCsv read_progress(const std::string& dir) { return csv_rows::read_table(dir + "/progress.csv"); }
 // Every row without its wall-clock cells (wall_s, time_to_target_s).
 std::vector<std::string> rows_without_wall(const ProgressCsv& c) {
   std::vector<std::string> out;

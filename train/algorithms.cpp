@@ -1,4 +1,5 @@
 #include "train/algorithms.hpp"
+#include "src/core/binary_io.hpp"
 #include "src/core/config_json.hpp"
 
 #include <stdexcept>
@@ -70,8 +71,7 @@ std::string algorithm_color(const std::string& algo) {
   for (const auto& [name, color] : fixed)
     if (algo == name) return color;
   static const char* muted[] = {"#44AA99", "#88CCEE", "#DDCC77", "#CC6677", "#332288", "#882255", "#117733", "#999933"};
-  uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a of the name: the same colour in every report
-  for (unsigned char ch : algo) h = (h ^ ch) * 0x100000001b3ull;
+  const uint64_t h = bin::fnv1a(algo.data(), algo.size());  // the same colour in every report
   return muted[h % (sizeof(muted) / sizeof(muted[0]))];
 }
 

@@ -8,7 +8,6 @@
 namespace atacom {
 
 namespace {
-constexpr uint64_t kFnvSeed = 0xcbf29ce484222325ull;
 constexpr size_t kReadStep = size_t{16} << 20;  // buffers grow by at most this per read
 }  // namespace
 
@@ -34,7 +33,7 @@ std::string ContainerWriter::finish() const {
 }
 
 ContainerReader::ContainerReader(std::istream& in, std::string prefix, bool versioned)
-    : in_(in), prefix_(std::move(prefix)), sum_(kFnvSeed) {
+    : in_(in), prefix_(std::move(prefix)), sum_(bin::kFnv1aSeed) {
   read_exact(magic_, kContainerMagicBytes, "header");
   if (versioned) {
     std::string v;

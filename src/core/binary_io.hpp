@@ -94,8 +94,10 @@ inline void read_rng(std::istream& in, Rng& r, const char* what) {
   r.set_state(st);
 }
 
-// FNV-1a 64-bit over bytes: cheap integrity check for whole files.
-inline uint64_t fnv1a(const void* data, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
+// FNV-1a 64-bit over bytes: cheap integrity check for whole files. Pass the
+// previous value as h to hash pieces in turn.
+inline constexpr uint64_t kFnv1aSeed = 0xcbf29ce484222325ull;
+inline uint64_t fnv1a(const void* data, size_t n, uint64_t h = kFnv1aSeed) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (size_t i = 0; i < n; ++i) { h ^= p[i]; h *= 0x100000001b3ull; }
   return h;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "atacom/rng.hpp"
+#include "src/core/binary_io.hpp"
 
 namespace atacom {
 
@@ -51,14 +52,7 @@ double iqm(std::vector<double> v) {
   return double(mean_ld(v.begin() + long(cut), v.end() - long(cut)));
 }
 
-uint64_t bootstrap_stream(const std::string& key) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : key) {
-    h ^= c;
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
+uint64_t bootstrap_stream(const std::string& key) { return bin::fnv1a(key.data(), key.size()); }
 
 Interval bootstrap_iqm_ci(const std::vector<double>& v, int resamples, uint64_t seed, uint64_t stream) {
   if (v.empty()) return {std::nan(""), std::nan("")};
