@@ -21,12 +21,16 @@ const RegisterCommand reg{Command{
       auto seeds = std::make_shared<std::string>();
       app.add_option("--seeds", *seeds,
                      "only these seeds' cells, e.g. 0-4 or 0,2,5 (the report goes to DIR/report-seeds-<list>)");
+      app.add_option("--claims", o->claims,
+                     "the paper's claims to check (claims.csv): a claims file, or none; default: the shipped "
+                     "data/paper_claims.json");
       return [o, seeds]() {
         if (!seeds->empty()) o->seeds = parse_seed_list(*seeds);
         const ReportResult r = write_report(*o);
         std::cout << "report: " << r.finished << " of " << r.runs << " runs finished";
         if (!r.missing.empty()) std::cout << " (" << r.missing.size() << " missing or failed: listed in the report)";
         if (!r.dropped.empty()) std::cout << "; " << r.dropped.size() << " runs ended far below their best evaluation";
+        if (r.claims) std::cout << "; the paper's claims checked (claims.csv)";
         std::cout << "\n" << r.index_html << "\n";
         return 0;
       };

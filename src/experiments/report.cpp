@@ -10,10 +10,14 @@
 #include <string_view>
 
 #include "src/core/config_json.hpp"
+#include "src/core/data_dir.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/core/svg.hpp"
+#include "src/experiments/report_claims.hpp"
 #include "src/experiments/report_data.hpp"
+#include "src/experiments/report_improvement.hpp"
 #include "src/experiments/report_shelf_real.hpp"
+#include "src/experiments/report_text.hpp"
 #include "src/experiments/report_stats.hpp"
 #include "train/algorithms.hpp"
 
@@ -24,46 +28,6 @@ namespace atacom {
 namespace {
 
 constexpr size_t kMinSeeds = kMinSeedsForInterval;
-
-// "n = 1: no interval": what a table cell says instead of a statistic it cannot give.
-std::string no_stat(size_t n, const char* what) { return "n = " + std::to_string(n) + ": no " + what; }
-
-std::string num(double v) {
-  if (std::isnan(v)) return "nan";
-  char b[40];
-  std::snprintf(b, sizeof(b), "%.12g", v);
-  return b;
-}
-// A statistic that was not computed (too few seeds): an empty CSV field.
-std::string num_or_empty(double v) {
-  if (std::isnan(v)) return "";
-  char b[40];
-  std::snprintf(b, sizeof(b), "%.12g", v);
-  return b;
-}
-std::string short_num(double v) {
-  if (std::isnan(v)) return "-";
-  char b[40];
-  std::snprintf(b, sizeof(b), "%.4g", v);
-  return b;
-}
-// A censored statistic: +inf reads "not reached".
-std::string target_num(double v) { return std::isinf(v) && v > 0 ? "not reached" : short_num(v); }
-std::string html_escape(const std::string& s) { return svg_escape(printable_text(s, 4096)); }
-// Text for Markdown: printable bytes only, HTML's specials as entities and
-// Markdown's punctuation backslash-escaped, so a directory name is shown as
-// written, never rendered as markup, a link or a heading.
-std::string markdown_text(const std::string& s) {
-  std::string out;
-  for (char c : printable_text(s, 4096)) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else if (std::string_view("\\`*_{}[]()#+-.!|~\"'").find(c) != std::string_view::npos) out += std::string("\\") + c;
-    else out += c;
-  }
-  return out;
-}
 
 struct Row {
   std::string env, algo, metric;
@@ -88,15 +52,6 @@ struct Drop {
 
 // The rows of the plain metrics (censored = false) or of the censored ones,
 // whose runs that never met the target are in v as +inf (no mean or std).
-// The algorithm whose improvement on each baseline is reported: ATACOM-SAC
-// (the paper's), or ATACOM-PPO in a sweep without it; "" when neither ran.
-std::string main_algorithm(const ReportData& d) {
-  for (const char* m : {"atacom-sac", "atacom-ppo"})
-    for (const auto& a : d.algos)
-      if (a == m) return m;
-  return "";
-}
-
 std::vector<Row> table_rows(const ReportData& d, bool censored) {
   std::vector<Row> rows;
   for (const auto& env : d.envs)
@@ -123,44 +78,15 @@ std::vector<Row> table_rows(const ReportData& d, bool censored) {
   return rows;
 }
 
-// The pairs P(improvement) is formed for: the main algorithm against every
-// other one, then every other source through ATACOM against the same source
-// without a layer when both ran (the paper's "ATACOM improves LA": la-atacom
-// vs la).
-std::vector<std::pair<std::string, std::string>> improvement_pairs(const ReportData& d) {
-  std::vector<std::pair<std::string, std::string>> out;
-  const std::string main = main_algorithm(d);
-  if (main.empty()) return out;
-  for (const auto& base : d.algos)
-    if (base != main) out.emplace_back(main, base);
-  for (const auto& algo : d.algos) {
-    const Algorithm& a = find_algorithm(algo);
-    if (algo == main || a.safety != SafetyLayer::Atacom) continue;
-    const std::string& bare = algorithm_for(a.source, a.learner, SafetyLayer::None).name;
-    if (std::find(d.algos.begin(), d.algos.end(), bare) != d.algos.end()) out.emplace_back(algo, bare);
-  }
-  return out;
-}
-
 std::vector<Pi> improvements(const ReportData& d) {
   std::vector<Pi> out;
-  const std::string main = main_algorithm(d);
   for (const auto& env : d.envs)
     for (const auto& [algo, base] : improvement_pairs(d))
       for (const ReportMetric& m : report_metrics()) {
         if (!m.boxplot && !m.censored) continue;
-        const std::vector<double> x = metric_values(d, env, algo, m.key), y = metric_values(d, env, base, m.key);
-        if (x.empty() || y.empty()) continue;
-        const bool enough = x.size() >= kMinSeeds && y.size() >= kMinSeeds;
-        Pi p{env, m.key, algo, base, x.size(), y.size()};
-        if (enough) {
-          p.p = probability_of_improvement(x, y, m.higher_better);
-          // The main algorithm keeps the streams it had before the other pairs were added.
-          std::string stream = env + "/" + m.key + "/improvement/" + base;
-          if (algo != main) stream.append("/by/").append(algo);
-          p.ci = bootstrap_improvement_ci(x, y, m.higher_better, d.opts.resamples, d.opts.seed, bootstrap_stream(stream));
-        }
-        out.push_back(p);
+        const Improvement i = improvement(d, env, m, algo, base);
+        if (i.n_algo == 0 || i.n_baseline == 0) continue;
+        out.push_back({env, m.key, algo, base, i.n_algo, i.n_baseline, i.p, i.ci});
       }
   return out;
 }
@@ -257,9 +183,8 @@ std::string iqm_text(const std::vector<double>& v, const ReportData& d, const st
 
 // The ShelfEnvReal section: shelf_real.csv (a row per evaluated run and
 // target, skipped runs with their reason) and a table per algorithm.
-void write_shelf_real(const ReportData& d, const std::string& csv_path, std::ostringstream& md,
-                      std::ostringstream& html) {
-  const ShelfRealSection s = shelf_real_section(d);
+void write_shelf_real(const ReportData& d, const ShelfRealSection& s, const std::string& csv_path,
+                      std::ostringstream& md, std::ostringstream& html) {
   if (s.runs.empty()) return;
   std::string csv = "algo,seed,safety,target,success_rate,final_error_mean,final_error_std,collisions,time_mean,"
                     "time_std,violation_steps,skipped\n";
@@ -389,6 +314,12 @@ std::string report_dir_name(const ReportOptions& opts) {
 
 ReportResult write_report(const ReportOptions& opts) {
   const ReportData d = load_report_data(opts);
+  // Read before anything is written, so a bad claims file leaves no half report.
+  std::vector<Claim> claims;
+  if (opts.claims != "none") {
+    const std::string path = opts.claims.empty() ? data_file("paper_claims.json") : opts.claims;
+    claims = parse_claims(read_json_file(path, "claims file '" + printable_text(path) + "'"), "claims file '" + printable_text(path) + "'");
+  }
   ReportResult res;
   const std::string name = report_dir_name(opts);
   res.report_dir = (fs::path(opts.dir) / name).string();
@@ -480,6 +411,8 @@ ReportResult write_report(const ReportOptions& opts) {
        << "<h1>Sweep report</h1><p>" << html_escape(opts.dir) << ": " << res.finished << " of " << res.runs
        << " runs finished" << html_escape(subset) << ".</p>" << (few.empty() ? "" : "<p class=\"note\"><b>" + html_escape(few) + "</b></p>")
        << "<p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
+  const ShelfRealSection shelf = shelf_real_section(d);
+  res.claims = write_claims(d, shelf, claims, out("claims.csv"), md, html);
   for (const auto& env : d.envs) {
     md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n"
        << "![cost and return](cost_return_" << env << ".svg)\n\n![training cost](train_cost_" << env << ".svg)\n\n";
@@ -549,7 +482,7 @@ ReportResult write_report(const ReportOptions& opts) {
       html << "</table>\n";
     }
   }
-  write_shelf_real(d, out("shelf_real.csv"), md, html);
+  write_shelf_real(d, shelf, out("shelf_real.csv"), md, html);
   md << "## Final vs best evaluation\n\n| run | final return | best return (at env steps) | final distance | best "
         "distance | fell far |\n|---|---|---|---|---|---|\n";
   html << "<h2>Final vs best evaluation</h2><table><tr><th>run</th><th>final return</th><th>best return</th>"
@@ -581,7 +514,8 @@ ReportResult write_report(const ReportOptions& opts) {
     html << "</table>\n";
   }
   html << "<p class=\"note\">Files: summary.csv, time_to_target.csv, summary.md, prob_improvement.csv, "
-          "final_vs_best.csv, missing.csv, shelf_real.csv (a sweep with shelf runs) and "
+          "final_vs_best.csv, missing.csv, shelf_real.csv (a sweep with shelf runs), claims.csv (a sweep with the "
+          "paper's cells) and "
           "the SVG figures beside this page.</p></body></html>\n";
   write_file_atomic(out("summary.md"), md.str());
   write_file_atomic(res.index_html, html.str());

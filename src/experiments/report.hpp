@@ -8,6 +8,9 @@
 //                         then each other source through ATACOM vs the same source without: la-atacom vs la)
 //   final_vs_best.csv     per run: final and best evaluation side by side, drop = 1 when the final one fell far
 //   missing.csv           cells without a finished run: state and log
+//   claims.csv            (sweeps with a claim's cells) the paper's claims, one row per check: the numbers
+//                         and a verdict (src/experiments/report_claims.hpp); summary.md and index.html
+//                         open with them
 //   shelf_real.csv        (sweeps with shelf runs) every finished shelf policy through the ShelfEnvReal
 //                         protocol: algo, seed, safety, target, success_rate, final_error_mean, ...
 //                         (src/experiments/report_shelf_real.hpp); skipped runs with their reason
@@ -56,6 +59,9 @@ struct ReportOptions {
   // the seeds a sweep has completed while it runs on; the report then goes
   // to DIR/report-seeds-<list> (report_dir_name).
   std::vector<int64_t> seeds;
+  // The paper's claims to check (src/experiments/report_claims.hpp): a
+  // claims file; empty: the shipped data/paper_claims.json; "none": none.
+  std::string claims;
 };
 // Parses "0-4", "0,2,5" or "0-4,9" into the ascending seeds (no repeats; at
 // most 100000). Throws std::invalid_argument naming --seeds otherwise.
@@ -71,6 +77,7 @@ struct ReportResult {
   int runs = 0, finished = 0;
   std::vector<std::string> missing;  // cell names without a finished run
   std::vector<std::string> dropped;  // runs whose final evaluation fell far below their best
+  bool claims = false;               // claims.csv written: the sweep holds a claim's cells
 };
 
 // Throws std::invalid_argument when DIR is not a sweep directory, or holds no finished run.

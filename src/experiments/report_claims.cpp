@@ -1,0 +1,291 @@
+// The paper's claims in the sweep report (report_claims.hpp).
+#include "src/experiments/report_claims.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "src/core/config_json.hpp"
+#include "src/core/fs_util.hpp"
+#include "src/core/value_range.hpp"
+#include "src/experiments/report_improvement.hpp"
+#include "src/experiments/report_stats.hpp"
+#include "src/experiments/report_text.hpp"
+
+namespace atacom {
+
+namespace {
+
+// The ShelfEnvReal numbers a check may read, one value per evaluated policy.
+constexpr const char* kShelfRealMetrics[] = {"shelf_real.success_1", "shelf_real.success_2", "shelf_real.error_1",
+                                             "shelf_real.error_2", "shelf_real.collisions"};
+bool is_shelf_real_metric(const std::string& m) {
+  return std::find(std::begin(kShelfRealMetrics), std::end(kShelfRealMetrics), m) != std::end(kShelfRealMetrics);
+}
+bool higher_is_better(const std::string& metric) {
+  if (const ReportMetric* m = find_report_metric(metric)) return m->higher_better;
+  return metric.rfind("shelf_real.success", 0) == 0;
+}
+
+std::string text_at(const nlohmann::json& j, const char* key, const std::string& where) {
+  if (!j.contains(key)) throw std::invalid_argument(where + ": missing key '" + key + "'");
+  if (!j[key].is_string() || j[key].get<std::string>().empty())
+    throw std::invalid_argument(where + "." + key + " must be a non-empty string, is " + value_text(j[key]));
+  return j[key].get<std::string>();
+}
+
+ClaimCheck parse_check(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_object()) throw std::invalid_argument(where + " must be a JSON object");
+  ClaimCheck c;
+  c.kind = text_at(j, "kind", where);
+  if (c.kind == "better") require_exact_keys(j, {"kind", "env", "metric", "algo", "baseline"}, where);
+  else if (c.kind == "zero") require_exact_keys(j, {"kind", "env", "metric", "algo"}, where);
+  else if (c.kind == "paper_value") require_exact_keys(j, {"kind", "env", "metric", "algo", "paper_value"}, where);
+  else
+    throw std::invalid_argument(where + ".kind is " + value_text(j["kind"]) + ", must be one of better, zero, paper_value");
+  c.env = text_at(j, "env", where);
+  c.algo = text_at(j, "algo", where);
+  c.metric = text_at(j, "metric", where);
+  const ReportMetric* m = find_report_metric(c.metric);
+  const bool shelf_real = is_shelf_real_metric(c.metric);
+  if ((!m || m->censored) && !shelf_real) {
+    std::string valid;
+    for (const ReportMetric& r : report_metrics())
+      if (!r.censored) valid += std::string(valid.empty() ? "" : ", ") + r.key;
+    for (const char* s : kShelfRealMetrics) valid += std::string(", ") + s;
+    throw std::invalid_argument(where + ".metric is " + value_text(j["metric"]) + ", must be one of " + valid);
+  }
+  if (c.kind == "better") {
+    if (shelf_real)
+      throw std::invalid_argument(where + ".metric: a better check reads a report metric, not " + c.metric);
+    c.baseline = text_at(j, "baseline", where);
+    if (c.baseline == c.algo) throw std::invalid_argument(where + ".baseline must differ from its algo");
+  }
+  if (c.kind == "paper_value") c.paper_value = checked_number(j["paper_value"], where + ".paper_value", range::finite());
+  return c;
+}
+
+// The values of (env, algo) a check reads: finished runs' (report metrics)
+// or evaluated policies' (shelf_real.*), in seed order.
+std::vector<double> check_values(const ReportData& d, const ShelfRealSection& shelf, const ClaimCheck& c,
+                                 const std::string& algo) {
+  if (!is_shelf_real_metric(c.metric)) return metric_values(d, c.env, algo, c.metric);
+  std::vector<double> v;
+  if (c.env != "shelf") return v;
+  for (const ShelfRealRun& r : shelf.runs) {
+    if (r.run->cell.algo != algo || !r.skipped.empty() || r.result.targets.size() < 2) continue;
+    const auto& t = r.result.targets;
+    if (c.metric == "shelf_real.success_1") v.push_back(t[0].success_rate);
+    else if (c.metric == "shelf_real.success_2") v.push_back(t[1].success_rate);
+    else if (c.metric == "shelf_real.error_1") v.push_back(t[0].final_error_mean);
+    else if (c.metric == "shelf_real.error_2") v.push_back(t[1].final_error_mean);
+    else v.push_back(double(r.result.total_collisions));
+  }
+  return v;
+}
+
+// The IQM's interval with the stream the report's own table of these values uses.
+Interval iqm_interval(const ReportData& d, const ClaimCheck& c, const std::string& algo, const std::vector<double>& v) {
+  std::string stream = c.env + "/" + algo + "/" + c.metric;
+  if (is_shelf_real_metric(c.metric)) {
+    std::string m = c.metric.substr(std::string("shelf_real.").size());
+    m.erase(std::remove(m.begin(), m.end(), '_'), m.end());  // success_1 -> success1, as the ShelfEnvReal table
+    stream = "shelf_real/" + algo + "/" + m;
+  }
+  return bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream(stream));
+}
+
+struct CheckResult {
+  const Claim* claim = nullptr;
+  const ClaimCheck* check = nullptr;
+  size_t n_algo = 0, n_baseline = 0;
+  double algo_iqm = NAN, base_iqm = NAN;
+  Interval algo_ci{NAN, NAN}, base_ci{NAN, NAN};
+  Improvement p;
+  size_t nonzero = 0;
+  std::string verdict, ours;
+};
+
+bool in_sweep(const std::vector<std::string>& names, const std::string& x) {
+  return std::find(names.begin(), names.end(), x) != names.end();
+}
+
+std::string iqm_text(double iqm, Interval ci, size_t n) {
+  return short_num(iqm) + (n >= kMinSeedsForInterval ? " [" + short_num(ci.low) + ", " + short_num(ci.high) + "]" : "");
+}
+
+CheckResult evaluate(const ReportData& d, const ShelfRealSection& shelf, const Claim& cl, const ClaimCheck& c) {
+  CheckResult r;
+  r.claim = &cl;
+  r.check = &c;
+  if (!in_sweep(d.envs, c.env) || !in_sweep(d.algos, c.algo) || (c.kind == "better" && !in_sweep(d.algos, c.baseline))) {
+    r.verdict = "not in this sweep";
+    return r;
+  }
+  const std::vector<double> x = check_values(d, shelf, c, c.algo);
+  r.n_algo = x.size();
+  if (!x.empty()) {
+    r.algo_iqm = iqm(x);
+    if (x.size() >= kMinSeedsForInterval) r.algo_ci = iqm_interval(d, c, c.algo, x);
+  }
+  if (c.kind == "zero") {
+    for (double v : x) r.nonzero += v != 0;
+    if (x.empty()) r.verdict = "too few runs";
+    else r.verdict = r.nonzero == 0 ? "holds" : "does not hold";
+    r.ours = r.nonzero == 0 ? "0 in " + std::to_string(x.size()) + " of " + std::to_string(x.size()) + " runs"
+                            : "not 0 in " + std::to_string(r.nonzero) + " of " + std::to_string(x.size()) +
+                                  " runs (IQM " + iqm_text(r.algo_iqm, r.algo_ci, x.size()) + ")";
+    return r;
+  }
+  if (c.kind == "paper_value") {
+    r.ours = iqm_text(r.algo_iqm, r.algo_ci, x.size()) + " (n = " + std::to_string(x.size()) + ") vs the paper's " +
+             short_num(c.paper_value);
+    if (x.size() < kMinSeedsForInterval) {
+      r.verdict = "too few runs";
+      return r;
+    }
+    const bool worse = higher_is_better(c.metric) ? r.algo_ci.high < c.paper_value : r.algo_ci.low > c.paper_value;
+    r.verdict = worse ? "does not hold" : "holds";
+    return r;
+  }
+  const std::vector<double> y = check_values(d, shelf, c, c.baseline);
+  r.n_baseline = y.size();
+  if (!y.empty()) {
+    r.base_iqm = iqm(y);
+    if (y.size() >= kMinSeedsForInterval) r.base_ci = iqm_interval(d, c, c.baseline, y);
+  }
+  r.p = improvement(d, c.env, *find_report_metric(c.metric), c.algo, c.baseline);
+  r.ours = "IQM " + iqm_text(r.algo_iqm, r.algo_ci, r.n_algo) + " vs " + iqm_text(r.base_iqm, r.base_ci, r.n_baseline);
+  if (std::isnan(r.p.p)) {
+    r.verdict = "too few runs";
+    return r;
+  }
+  r.ours = "P " + short_num(r.p.p) + " [" + short_num(r.p.ci.low) + ", " + short_num(r.p.ci.high) + "]; " + r.ours;
+  r.verdict = r.p.ci.low > 0.5 ? "holds" : r.p.ci.high < 0.5 ? "does not hold" : "not separable";
+  return r;
+}
+
+// A claim's verdict from its checks': the one they share, or "mixed: 2 hold, 1 not separable".
+std::string claim_verdict(const std::vector<CheckResult>& rs, const Claim& cl) {
+  size_t held = 0, failed = 0, open = 0;
+  bool any_in_sweep = false;
+  for (const CheckResult& r : rs) {
+    if (r.claim != &cl) continue;
+    any_in_sweep = any_in_sweep || r.verdict != "not in this sweep";
+    held += r.verdict == "holds";
+    failed += r.verdict == "does not hold";
+    open += r.verdict == "not separable";
+  }
+  const size_t decided = held + failed + open;
+  if (decided == 0) return any_in_sweep ? "too few runs" : "not in this sweep";
+  if (held == decided) return "holds";
+  if (failed == decided) return "does not hold";
+  if (open == decided) return "not separable";
+  std::string v;
+  const auto part = [&](size_t k, const char* one, const char* many) {
+    if (k > 0) v += (v.empty() ? "mixed: " : ", ") + std::to_string(k) + (k == 1 ? one : many);
+  };
+  part(held, " holds", " hold");
+  part(failed, " does not hold", " do not hold");
+  part(open, " not separable", " not separable");
+  return v;
+}
+
+std::string check_text(const ClaimCheck& c) {
+  const std::string metric = c.metric + " (" + (higher_is_better(c.metric) ? "higher" : "lower") + " is better)";
+  if (c.kind == "better") return c.env + ": " + c.algo + " better than " + c.baseline + " on " + metric;
+  if (c.kind == "zero") return c.env + ": " + c.algo + "'s " + c.metric + " is 0 in every run";
+  return c.env + ": " + c.algo + "'s " + metric + " at least the paper's " + short_num(c.paper_value);
+}
+
+const char* verdict_class(const std::string& v) {
+  if (v == "holds") return "good";
+  if (v == "does not hold") return "bad";
+  if (v == "not separable" || v.rfind("mixed", 0) == 0) return "";
+  return "na";
+}
+
+std::string csv_cell(std::string s) {
+  for (char& c : s)
+    if (c == ',' || c == '\n' || c == '"') c = ';';
+  return s;
+}
+
+}  // namespace
+
+std::vector<Claim> parse_claims(const nlohmann::json& doc, const std::string& what) {
+  if (!doc.is_object()) throw std::invalid_argument(what + " must be a JSON object");
+  require_exact_keys(doc, {"about", "claims"}, what);
+  if (!doc["claims"].is_array() || doc["claims"].empty())
+    throw std::invalid_argument(what + ": claims must be a non-empty array");
+  std::vector<Claim> out;
+  for (size_t i = 0; i < doc["claims"].size(); ++i) {
+    const nlohmann::json& j = doc["claims"][i];
+    const std::string where = what + ": claims[" + std::to_string(i) + "]";
+    require_exact_keys(j, {"id", "claim", "paper", "checks"}, where);
+    Claim c{text_at(j, "id", where), text_at(j, "claim", where), text_at(j, "paper", where), {}};
+    for (const Claim& o : out)
+      if (o.id == c.id) throw std::invalid_argument(where + ".id '" + printable_text(c.id) + "' is used twice");
+    if (!j["checks"].is_array() || j["checks"].empty())
+      throw std::invalid_argument(where + ".checks must be a non-empty array");
+    for (size_t k = 0; k < j["checks"].size(); ++k)
+      c.checks.push_back(parse_check(j["checks"][k], where + ".checks[" + std::to_string(k) + "]"));
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+bool write_claims(const ReportData& d, const ShelfRealSection& shelf, const std::vector<Claim>& claims,
+                  const std::string& csv_path, std::ostream& md, std::ostream& html) {
+  std::vector<CheckResult> rs;
+  for (const Claim& cl : claims)
+    for (const ClaimCheck& c : cl.checks) rs.push_back(evaluate(d, shelf, cl, c));
+  if (std::all_of(rs.begin(), rs.end(), [](const CheckResult& r) { return r.verdict == "not in this sweep"; }))
+    return false;
+
+  std::string csv =
+      "claim,kind,env,metric,algo,baseline,paper_value,n_algo,n_baseline,algo_iqm,algo_ci_low,algo_ci_high,"
+      "baseline_iqm,baseline_ci_low,baseline_ci_high,p_improvement,p_ci_low,p_ci_high,nonzero_runs,verdict\n";
+  for (const CheckResult& r : rs) {
+    const ClaimCheck& c = *r.check;
+    csv += csv_cell(r.claim->id) + "," + c.kind + "," + csv_cell(c.env) + "," + c.metric + "," + csv_cell(c.algo) +
+           "," + csv_cell(c.baseline) + "," + (c.kind == "paper_value" ? num(c.paper_value) : "") + "," +
+           std::to_string(r.n_algo) + "," + (c.kind == "better" ? std::to_string(r.n_baseline) : "") + "," +
+           num_or_empty(r.algo_iqm) + "," + num_or_empty(r.algo_ci.low) + "," + num_or_empty(r.algo_ci.high) + "," +
+           num_or_empty(r.base_iqm) + "," + num_or_empty(r.base_ci.low) + "," + num_or_empty(r.base_ci.high) + "," +
+           num_or_empty(r.p.p) + "," + num_or_empty(r.p.ci.low) + "," + num_or_empty(r.p.ci.high) + "," +
+           (c.kind == "zero" ? std::to_string(r.nonzero) : "") + "," + r.verdict + "\n";
+  }
+  write_file_atomic(csv_path, csv);
+
+  const std::string note =
+      "Each claim of the paper is a few checks of this sweep's numbers (claims.csv; the rules: "
+      "data/paper_claims.json). better: P(improvement) with its 95% interval, holds above 0.5, does not hold "
+      "below, not separable when the interval holds 0.5. zero: every run's value is 0. paper_value: ours "
+      "(IQM [95% CI]) against the paper's number, holds unless the interval is wholly worse. The paper ran 25 "
+      "seeds x 2M steps: check this sweep's steps and seeds before reading a verdict as the paper's.";
+  md << "## The paper's claims\n\n" << note << "\n\n| # | claim | paper | check | ours | verdict |\n|---|---|---|---|---|---|\n";
+  html << "<h2>The paper's claims</h2><p class=\"note\">" << html_escape(note) << "</p>"
+       << "<table><tr><th>#</th><th>claim</th><th>paper</th><th>check</th><th>ours</th><th>verdict</th></tr>\n";
+  for (const Claim& cl : claims) {
+    const std::string v = claim_verdict(rs, cl);
+    md << "| " << markdown_text(cl.id) << " | " << markdown_text(cl.claim) << " | " << markdown_text(cl.paper)
+       << " | | | **" << v << "** |\n";
+    html << "<tr><td class=\"l\">" << html_escape(cl.id) << "</td><td class=\"l\">" << html_escape(cl.claim)
+         << "</td><td class=\"l\">" << html_escape(cl.paper) << "</td><td></td><td></td><td class=\""
+         << verdict_class(v) << "\"><b>" << html_escape(v) << "</b></td></tr>\n";
+    for (const CheckResult& r : rs) {
+      if (r.claim != &cl) continue;
+      md << "| | | | " << markdown_text(check_text(*r.check)) << " | " << markdown_text(r.ours) << " | " << r.verdict
+         << " |\n";
+      html << "<tr><td></td><td></td><td></td><td class=\"l\">" << html_escape(check_text(*r.check))
+           << "</td><td class=\"l\">" << html_escape(r.ours) << "</td><td class=\"" << verdict_class(r.verdict)
+           << "\">" << html_escape(r.verdict) << "</td></tr>\n";
+    }
+  }
+  md << "\n";
+  html << "</table>\n";
+  return true;
+}
+
+}  // namespace atacom
