@@ -195,7 +195,7 @@ std::string check_text(const ClaimCheck& c) {
   const std::string metric = c.metric + " (" + (higher_is_better(c.metric) ? "higher" : "lower") + " is better)";
   if (c.kind == "better") return c.env + ": " + c.algo + " better than " + c.baseline + " on " + metric;
   if (c.kind == "zero") return c.env + ": " + c.algo + "'s " + c.metric + " is 0 in every run";
-  return c.env + ": " + c.algo + "'s " + metric + " at least the paper's " + short_num(c.paper_value);
+  return c.env + ": " + c.algo + "'s " + metric + " as good as the paper's " + short_num(c.paper_value) + " or better";
 }
 
 const char* verdict_class(const std::string& v) {
