@@ -81,13 +81,16 @@ TEST_CASE("report claims: each rule's verdict, and the numbers of the report's o
   json value_bad = value_ok;
   value_bad["paper_value"] = 0.01;  // ours wholly worse
   json absent = check("zero", "hri", "train_collisions", "atacom-sac");
+  json no_values = check("paper_value", "table", "spills", "atacom-sac");  // no run has spills
+  no_values["paper_value"] = 4;
   const json doc = {{"about", "test"},
                     {"claims",
                      {{{"id", "a"}, {"claim", "x"}, {"paper", "p"}, {"checks", {better, zero_ok, value_ok}}},
                       {{"id", "b"}, {"claim", "y"}, {"paper", "p"}, {"checks", {reversed, zero_bad, value_bad}}},
                       {{"id", "c"}, {"claim", "z"}, {"paper", "p"}, {"checks", {tie}}},
                       {{"id", "d"}, {"claim", "w"}, {"paper", "p"}, {"checks", {better, reversed, tie}}},
-                      {{"id", "e"}, {"claim", "v"}, {"paper", "p"}, {"checks", {absent}}}}}};
+                      {{"id", "e"}, {"claim", "v"}, {"paper", "p"}, {"checks", {absent}}},
+                      {{"id", "f"}, {"claim", "u"}, {"paper", "p"}, {"checks", {zero_ok, no_values, absent}}}}}};
   const std::string claims_file = dir + "_claims.json";
   std::ofstream(claims_file) << doc.dump(1);
   ReportOptions o;
@@ -99,10 +102,11 @@ TEST_CASE("report claims: each rule's verdict, and the numbers of the report's o
   CHECK(res.claims);
 
   const auto rows = csv_rows::read(dir + "/report/claims.csv");
-  REQUIRE(rows.size() == 3 + 3 + 1 + 3 + 1);
+  REQUIRE(rows.size() == 3 + 3 + 1 + 3 + 1 + 3);
   const std::vector<std::string> want = {"holds",         "holds",         "holds", "does not hold",
                                          "does not hold", "does not hold", "not separable", "holds",
-                                         "does not hold", "not separable", "not in this sweep"};
+                                         "does not hold", "not separable", "not in this sweep",
+                                         "holds",         "too few runs",  "not in this sweep"};
   for (size_t i = 0; i < rows.size(); ++i) {
     INFO("row " << i);
     CHECK(rows[i].at("verdict") == want[i]);
@@ -135,6 +139,8 @@ TEST_CASE("report claims: each rule's verdict, and the numbers of the report's o
   CHECK(md.find("## The paper's claims") < md.find("## table"));
   CHECK(md.find("| **mixed: 1 holds, 1 does not hold, 1 not separable** |") != std::string::npos);
   CHECK(md.find("| **not in this sweep** |") != std::string::npos);
+  // A check with too few runs is counted, never passed over; one not in the sweep is left out.
+  CHECK(md.find("| **mixed: 1 holds, 1 too few runs** |") != std::string::npos);
   CHECK(slurp(dir + "/report/index.html").find("<h2>The paper's claims</h2>") != std::string::npos);
 
   // --claims none: no section.

@@ -165,22 +165,24 @@ CheckResult evaluate(const ReportData& d, const ShelfRealSection& shelf, const C
   return r;
 }
 
-// A claim's verdict from its checks': the one they share, or "mixed: 2 hold, 1 not separable".
+// A claim's verdict from its checks': the one they all share, or the count
+// of each ("mixed: 2 hold, 1 too few runs"); checks not in this sweep are
+// left out.
 std::string claim_verdict(const std::vector<CheckResult>& rs, const Claim& cl) {
-  size_t held = 0, failed = 0, open = 0;
-  bool any_in_sweep = false;
+  size_t held = 0, failed = 0, open = 0, few = 0;
   for (const CheckResult& r : rs) {
     if (r.claim != &cl) continue;
-    any_in_sweep = any_in_sweep || r.verdict != "not in this sweep";
     held += r.verdict == "holds";
     failed += r.verdict == "does not hold";
     open += r.verdict == "not separable";
+    few += r.verdict == "too few runs";
   }
-  const size_t decided = held + failed + open;
-  if (decided == 0) return any_in_sweep ? "too few runs" : "not in this sweep";
-  if (held == decided) return "holds";
-  if (failed == decided) return "does not hold";
-  if (open == decided) return "not separable";
+  const size_t counted = held + failed + open + few;
+  if (counted == 0) return "not in this sweep";
+  if (held == counted) return "holds";
+  if (failed == counted) return "does not hold";
+  if (open == counted) return "not separable";
+  if (few == counted) return "too few runs";
   std::string v;
   const auto part = [&](size_t k, const char* one, const char* many) {
     if (k > 0) v += (v.empty() ? "mixed: " : ", ") + std::to_string(k) + (k == 1 ? one : many);
@@ -188,6 +190,7 @@ std::string claim_verdict(const std::vector<CheckResult>& rs, const Claim& cl) {
   part(held, " holds", " hold");
   part(failed, " does not hold", " do not hold");
   part(open, " not separable", " not separable");
+  part(few, " too few runs", " too few runs");
   return v;
 }
 
