@@ -413,6 +413,9 @@ ReportResult write_report(const ReportOptions& opts) {
        << "<p class=\"note\">" << html_escape(methods_text(d)) << "</p>\n";
   const ShelfRealSection shelf = shelf_real_section(d);
   res.claims = write_claims(d, shelf, claims, out("claims.csv"), md, html);
+  // A file this report has no section for goes, so DIR/report never mixes two reports' files.
+  if (!res.claims) fs::remove(out("claims.csv"));
+  if (shelf.runs.empty()) fs::remove(out("shelf_real.csv"));
   for (const auto& env : d.envs) {
     md << "## " << env << "\n\n![boxplots](box_" << env << ".svg)\n\n![curves](curves_" << env << ".svg)\n\n"
        << "![cost and return](cost_return_" << env << ".svg)\n\n![training cost](train_cost_" << env << ".svg)\n\n";
