@@ -3,23 +3,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
-#include <string_view>
 
 #include "src/core/config_json.hpp"
 #include "src/core/data_dir.hpp"
 #include "src/core/fs_util.hpp"
-#include "src/core/svg.hpp"
 #include "src/experiments/report_claims.hpp"
 #include "src/experiments/report_data.hpp"
 #include "src/experiments/report_improvement.hpp"
 #include "src/experiments/report_shelf_real.hpp"
 #include "src/experiments/report_text.hpp"
 #include "src/experiments/report_stats.hpp"
-#include "train/algorithms.hpp"
 
 namespace fs = std::filesystem;
 
