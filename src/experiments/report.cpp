@@ -168,12 +168,12 @@ std::string seeds_note(size_t most) {
 }
 
 // "0.96 [0.88, 1]" over the evaluated policies; no interval below kMinSeeds.
-std::string iqm_text(const std::vector<double>& v, const ReportData& d, const std::string& key, bool attractor) {
+std::string iqm_text(const std::vector<double>& v, const ReportData& d, const std::string& stream, bool attractor) {
   if (v.empty()) return "-";
   if (attractor) return short_num(v[0]);
   std::string t = short_num(iqm(v));
   if (v.size() < kMinSeeds) return t + " (" + no_stat(v.size(), "interval") + ")";
-  const Interval ci = bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream("shelf_real/" + key));
+  const Interval ci = bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream(stream));
   return t + " [" + short_num(ci.low) + ", " + short_num(ci.high) + "]";
 }
 
@@ -218,18 +218,18 @@ void write_shelf_real(const ReportData& d, const ShelfRealSection& s, const std:
        << "<th>final error 2 [m]</th><th>collisions</th><th>violation steps</th></tr>\n";
   for (const ShelfRealAlgo& a : s.algos) {
     const std::string n = a.attractor ? "1 (deterministic)" : std::to_string(a.n);
-    const std::string c[4] = {iqm_text(a.success[0], d, a.algo + "/success1", a.attractor),
-                              iqm_text(a.success[1], d, a.algo + "/success2", a.attractor),
-                              iqm_text(a.error[0], d, a.algo + "/error1", a.attractor),
-                              iqm_text(a.error[1], d, a.algo + "/error2", a.attractor)};
+    const std::string c[4] = {iqm_text(a.success[0], d, shelf_real_stream(a.algo, "success1"), a.attractor),
+                              iqm_text(a.success[1], d, shelf_real_stream(a.algo, "success2"), a.attractor),
+                              iqm_text(a.error[0], d, shelf_real_stream(a.algo, "error1"), a.attractor),
+                              iqm_text(a.error[1], d, shelf_real_stream(a.algo, "error2"), a.attractor)};
     md << "| " << a.algo << " | " << a.safety << " | " << n;
     html << "<tr><td class=\"l\">" << a.algo << "</td><td class=\"l\">" << a.safety << "</td><td>" << n << "</td>";
     for (const std::string& x : c) {
       md << " | " << x;
       html << "<td>" << x << "</td>";
     }
-    md << " | " << a.collisions << " | " << a.violation_steps << " |\n";
-    html << "<td" << (a.collisions > 0 ? " class=\"bad\"" : "") << ">" << a.collisions << "</td><td>"
+    md << " | " << a.total_collisions() << " | " << a.violation_steps << " |\n";
+    html << "<td" << (a.total_collisions() > 0 ? " class=\"bad\"" : "") << ">" << a.total_collisions() << "</td><td>"
          << a.violation_steps << "</td></tr>\n";
   }
   html << "</table>\n";

@@ -16,12 +16,27 @@ namespace atacom {
 
 namespace {
 
-// The ShelfEnvReal numbers a check may read, one value per evaluated policy.
-constexpr const char* kShelfRealMetrics[] = {"shelf_real.success_1", "shelf_real.success_2", "shelf_real.error_1",
-                                             "shelf_real.error_2", "shelf_real.collisions"};
-bool is_shelf_real_metric(const std::string& m) {
-  return std::find(std::begin(kShelfRealMetrics), std::end(kShelfRealMetrics), m) != std::end(kShelfRealMetrics);
+// The ShelfEnvReal numbers a check may read, one value per evaluated policy
+// (the report's ShelfEnvReal section), and their key in the section's streams.
+struct ShelfRealMetric {
+  const char* name;
+  const char* stream;
+  const std::vector<double>& (*values)(const ShelfRealAlgo&);
+};
+constexpr ShelfRealMetric kShelfRealMetrics[] = {
+    {"shelf_real.success_1", "success1", [](const ShelfRealAlgo& a) -> const std::vector<double>& { return a.success[0]; }},
+    {"shelf_real.success_2", "success2", [](const ShelfRealAlgo& a) -> const std::vector<double>& { return a.success[1]; }},
+    {"shelf_real.error_1", "error1", [](const ShelfRealAlgo& a) -> const std::vector<double>& { return a.error[0]; }},
+    {"shelf_real.error_2", "error2", [](const ShelfRealAlgo& a) -> const std::vector<double>& { return a.error[1]; }},
+    {"shelf_real.collisions", "collisions",
+     [](const ShelfRealAlgo& a) -> const std::vector<double>& { return a.collisions; }},
+};
+const ShelfRealMetric* find_shelf_real_metric(const std::string& name) {
+  for (const ShelfRealMetric& m : kShelfRealMetrics)
+    if (name == m.name) return &m;
+  return nullptr;
 }
+bool is_shelf_real_metric(const std::string& m) { return find_shelf_real_metric(m) != nullptr; }
 bool higher_is_better(const std::string& metric) {
   if (const ReportMetric* m = find_report_metric(metric)) return m->higher_better;
   return metric.rfind("shelf_real.success", 0) == 0;
@@ -52,7 +67,7 @@ ClaimCheck parse_check(const nlohmann::json& j, const std::string& where) {
     std::string valid;
     for (const ReportMetric& r : report_metrics())
       if (!r.censored) valid += std::string(valid.empty() ? "" : ", ") + r.key;
-    for (const char* s : kShelfRealMetrics) valid += std::string(", ") + s;
+    for (const ShelfRealMetric& s : kShelfRealMetrics) valid += std::string(", ") + s.name;
     throw std::invalid_argument(where + ".metric is " + value_text(j["metric"]) + ", must be one of " + valid);
   }
   if (c.kind == "better") {
@@ -69,38 +84,37 @@ ClaimCheck parse_check(const nlohmann::json& j, const std::string& where) {
 // or evaluated policies' (shelf_real.*), in seed order.
 std::vector<double> check_values(const ReportData& d, const ShelfRealSection& shelf, const ClaimCheck& c,
                                  const std::string& algo) {
-  if (!is_shelf_real_metric(c.metric)) return metric_values(d, c.env, algo, c.metric);
-  std::vector<double> v;
-  if (c.env != "shelf") return v;
-  for (const ShelfRealRun& r : shelf.runs) {
-    if (r.run->cell.algo != algo || !r.skipped.empty() || r.result.targets.size() < 2) continue;
-    const auto& t = r.result.targets;
-    if (c.metric == "shelf_real.success_1") v.push_back(t[0].success_rate);
-    else if (c.metric == "shelf_real.success_2") v.push_back(t[1].success_rate);
-    else if (c.metric == "shelf_real.error_1") v.push_back(t[0].final_error_mean);
-    else if (c.metric == "shelf_real.error_2") v.push_back(t[1].final_error_mean);
-    else v.push_back(double(r.result.total_collisions));
-  }
-  return v;
+  const ShelfRealMetric* m = find_shelf_real_metric(c.metric);
+  if (!m) return metric_values(d, c.env, algo, c.metric);
+  if (c.env == "shelf")
+    for (const ShelfRealAlgo& a : shelf.algos)
+      if (a.algo == algo) return m->values(a);
+  return {};
 }
 
-// The IQM's interval with the stream the report's own table of these values uses.
-Interval iqm_interval(const ReportData& d, const ClaimCheck& c, const std::string& algo, const std::vector<double>& v) {
-  std::string stream = c.env + "/" + algo + "/" + c.metric;
-  if (is_shelf_real_metric(c.metric)) {
-    std::string m = c.metric.substr(std::string("shelf_real.").size());
-    m.erase(std::remove(m.begin(), m.end(), '_'), m.end());  // success_1 -> success1, as the ShelfEnvReal table
-    stream = "shelf_real/" + algo + "/" + m;
-  }
-  return bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream(stream));
+// n, IQM and its interval of the values a check reads, with the stream the
+// report's own table of those values uses (summary.csv, the ShelfEnvReal table).
+struct IqmSummary {
+  size_t n = 0;
+  double iqm = NAN;
+  Interval ci{NAN, NAN};
+};
+IqmSummary summary_of(const ReportData& d, const ClaimCheck& c, const std::string& algo, const std::vector<double>& v) {
+  IqmSummary r;
+  r.n = v.size();
+  if (v.empty()) return r;
+  r.iqm = iqm(v);
+  if (v.size() < kMinSeedsForInterval) return r;
+  const ShelfRealMetric* m = find_shelf_real_metric(c.metric);
+  const std::string stream = m ? shelf_real_stream(algo, m->stream) : c.env + "/" + algo + "/" + c.metric;
+  r.ci = bootstrap_iqm_ci(v, d.opts.resamples, d.opts.seed, bootstrap_stream(stream));
+  return r;
 }
 
 struct CheckResult {
   const Claim* claim = nullptr;
   const ClaimCheck* check = nullptr;
-  size_t n_algo = 0, n_baseline = 0;
-  double algo_iqm = NAN, base_iqm = NAN;
-  Interval algo_ci{NAN, NAN}, base_ci{NAN, NAN};
+  IqmSummary algo, base;
   Improvement p;
   size_t nonzero = 0;
   std::string verdict, ours;
@@ -110,8 +124,9 @@ bool in_sweep(const std::vector<std::string>& names, const std::string& x) {
   return std::find(names.begin(), names.end(), x) != names.end();
 }
 
-std::string iqm_text(double iqm, Interval ci, size_t n) {
-  return short_num(iqm) + (n >= kMinSeedsForInterval ? " [" + short_num(ci.low) + ", " + short_num(ci.high) + "]" : "");
+std::string iqm_text(const IqmSummary& s) {
+  return short_num(s.iqm) +
+         (s.n >= kMinSeedsForInterval ? " [" + short_num(s.ci.low) + ", " + short_num(s.ci.high) + "]" : "");
 }
 
 CheckResult evaluate(const ReportData& d, const ShelfRealSection& shelf, const Claim& cl, const ClaimCheck& c) {
@@ -123,39 +138,30 @@ CheckResult evaluate(const ReportData& d, const ShelfRealSection& shelf, const C
     return r;
   }
   const std::vector<double> x = check_values(d, shelf, c, c.algo);
-  r.n_algo = x.size();
-  if (!x.empty()) {
-    r.algo_iqm = iqm(x);
-    if (x.size() >= kMinSeedsForInterval) r.algo_ci = iqm_interval(d, c, c.algo, x);
-  }
+  r.algo = summary_of(d, c, c.algo, x);
   if (c.kind == "zero") {
     for (double v : x) r.nonzero += v != 0;
     if (x.empty()) r.verdict = "too few runs";
     else r.verdict = r.nonzero == 0 ? "holds" : "does not hold";
     r.ours = r.nonzero == 0 ? "0 in " + std::to_string(x.size()) + " of " + std::to_string(x.size()) + " runs"
                             : "not 0 in " + std::to_string(r.nonzero) + " of " + std::to_string(x.size()) +
-                                  " runs (IQM " + iqm_text(r.algo_iqm, r.algo_ci, x.size()) + ")";
+                                  " runs (IQM " + iqm_text(r.algo) + ")";
     return r;
   }
   if (c.kind == "paper_value") {
-    r.ours = iqm_text(r.algo_iqm, r.algo_ci, x.size()) + " (n = " + std::to_string(x.size()) + ") vs the paper's " +
+    r.ours = iqm_text(r.algo) + " (n = " + std::to_string(x.size()) + ") vs the paper's " +
              short_num(c.paper_value);
     if (x.size() < kMinSeedsForInterval) {
       r.verdict = "too few runs";
       return r;
     }
-    const bool worse = higher_is_better(c.metric) ? r.algo_ci.high < c.paper_value : r.algo_ci.low > c.paper_value;
+    const bool worse = higher_is_better(c.metric) ? r.algo.ci.high < c.paper_value : r.algo.ci.low > c.paper_value;
     r.verdict = worse ? "does not hold" : "holds";
     return r;
   }
-  const std::vector<double> y = check_values(d, shelf, c, c.baseline);
-  r.n_baseline = y.size();
-  if (!y.empty()) {
-    r.base_iqm = iqm(y);
-    if (y.size() >= kMinSeedsForInterval) r.base_ci = iqm_interval(d, c, c.baseline, y);
-  }
+  r.base = summary_of(d, c, c.baseline, check_values(d, shelf, c, c.baseline));
   r.p = improvement(d, c.env, *find_report_metric(c.metric), c.algo, c.baseline);
-  r.ours = "IQM " + iqm_text(r.algo_iqm, r.algo_ci, r.n_algo) + " vs " + iqm_text(r.base_iqm, r.base_ci, r.n_baseline);
+  r.ours = "IQM " + iqm_text(r.algo) + " vs " + iqm_text(r.base);
   if (std::isnan(r.p.p)) {
     r.verdict = "too few runs";
     return r;
@@ -253,9 +259,9 @@ bool write_claims(const ReportData& d, const ShelfRealSection& shelf, const std:
     const ClaimCheck& c = *r.check;
     csv += csv_cell(r.claim->id) + "," + c.kind + "," + csv_cell(c.env) + "," + c.metric + "," + csv_cell(c.algo) +
            "," + csv_cell(c.baseline) + "," + (c.kind == "paper_value" ? num(c.paper_value) : "") + "," +
-           std::to_string(r.n_algo) + "," + (c.kind == "better" ? std::to_string(r.n_baseline) : "") + "," +
-           num_or_empty(r.algo_iqm) + "," + num_or_empty(r.algo_ci.low) + "," + num_or_empty(r.algo_ci.high) + "," +
-           num_or_empty(r.base_iqm) + "," + num_or_empty(r.base_ci.low) + "," + num_or_empty(r.base_ci.high) + "," +
+           std::to_string(r.algo.n) + "," + (c.kind == "better" ? std::to_string(r.base.n) : "") + "," +
+           num_or_empty(r.algo.iqm) + "," + num_or_empty(r.algo.ci.low) + "," + num_or_empty(r.algo.ci.high) + "," +
+           num_or_empty(r.base.iqm) + "," + num_or_empty(r.base.ci.low) + "," + num_or_empty(r.base.ci.high) + "," +
            num_or_empty(r.p.p) + "," + num_or_empty(r.p.ci.low) + "," + num_or_empty(r.p.ci.high) + "," +
            (c.kind == "zero" ? std::to_string(r.nonzero) : "") + "," + r.verdict + "\n";
   }

@@ -43,11 +43,6 @@ Improvement computed(const ReportData& d, const std::string& env, const ReportMe
   return r;
 }
 
-bool is_pair(const ReportData& d, const std::string& algo, const std::string& base) {
-  const auto pairs = improvement_pairs(d);
-  return std::find(pairs.begin(), pairs.end(), std::make_pair(algo, base)) != pairs.end();
-}
-
 }  // namespace
 
 Improvement improvement(const ReportData& d, const std::string& env, const ReportMetric& m, const std::string& algo,
@@ -57,8 +52,12 @@ Improvement improvement(const ReportData& d, const std::string& env, const Repor
   const auto stream = [&](const std::string& a, const std::string& b) {
     return env + "/" + m.key + "/improvement/" + b + (a == main ? "" : "/by/" + a);
   };
-  if (is_pair(d, algo, base)) return computed(d, env, m, algo, base, stream(algo, base));
-  if (is_pair(d, base, algo)) {
+  const auto pairs = improvement_pairs(d);
+  const auto has = [&](const std::string& a, const std::string& b) {
+    return std::find(pairs.begin(), pairs.end(), std::make_pair(a, b)) != pairs.end();
+  };
+  if (has(algo, base)) return computed(d, env, m, algo, base, stream(algo, base));
+  if (has(base, algo)) {
     Improvement r = computed(d, env, m, base, algo, stream(base, algo));
     std::swap(r.n_algo, r.n_baseline);
     r.p = 1 - r.p;  // Mann-Whitney: every pair's 1 / 0.5 / 0 mirrors, resample by resample

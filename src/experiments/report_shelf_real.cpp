@@ -76,12 +76,20 @@ ShelfRealSection shelf_real_section(const ReportData& d) {
         a.success[t].push_back(row.result.targets[t].success_rate);
         a.error[t].push_back(row.result.targets[t].final_error_mean);
       }
-      a.collisions += row.result.total_collisions;
+      a.collisions.push_back(row.result.total_collisions);
       a.violation_steps += row.result.max_constraint_violations;
     }
     if (a.n > 0) s.algos.push_back(a);
   }
   return s;
 }
+
+int ShelfRealAlgo::total_collisions() const {
+  int n = 0;
+  for (double c : collisions) n += int(c);
+  return n;
+}
+
+std::string shelf_real_stream(const std::string& algo, const std::string& what) { return "shelf_real/" + algo + "/" + what; }
 
 }  // namespace atacom

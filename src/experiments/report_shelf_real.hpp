@@ -24,7 +24,9 @@ struct ShelfRealAlgo {
   bool attractor = false;  // one deterministic evaluation stands for every seed
   size_t n = 0;            // evaluated policies
   std::vector<double> success[2], error[2];  // per policy, target 1 and 2
-  int collisions = 0, violation_steps = 0;    // summed over policies
+  std::vector<double> collisions;             // per policy, both targets
+  int violation_steps = 0;                    // summed over policies
+  int total_collisions() const;
 };
 
 struct ShelfRealSection {
@@ -38,5 +40,10 @@ struct ShelfRealSection {
 // protocol projects through ATACOM or nothing, as the paper's robot did), as
 // are runs whose policy file is missing (a sweep copied without policies).
 ShelfRealSection shelf_real_section(const ReportData& d);
+
+// The bootstrap stream key of an algorithm's ShelfEnvReal number ("success1",
+// "error2", ...): the section's table and the paper's claims draw the same
+// resamples for it.
+std::string shelf_real_stream(const std::string& algo, const std::string& what);
 
 }  // namespace atacom
