@@ -43,21 +43,22 @@ TEST_CASE("report: every finished shelf policy goes through the ShelfEnvReal pro
   const SweepSpec spec = parse_sweep_spec(json::parse(R"({"envs": ["shelf"],
       "algos": ["atacom-sac", "safelayer-sac", "la-atacom"], "seeds": [0, 1, 2], "steps": 400})"));
   save_or_check_spec(dir.string(), spec);
-  // atacom-sac seeds 0 and 1 train for real (too short to learn: the policy
-  // is its initialisation, which differs by seed); seed 2 has no policy file.
-  for (int s : {0, 1}) {
+  // atacom-sac seeds 0 and 1 and safelayer-sac seed 0 train for real (too
+  // short to learn: the policy is its initialisation, which differs by
+  // seed); the other seeds have no policy file.
+  auto train = [&](const std::string& algo, int s) {
     TrainOptions o;
-    o.out_dir = (dir / ("runs/shelf/atacom-sac/seed-" + std::to_string(s))).string();
-    run_training(resolve_run_config(json{{"train", {{"env", "shelf"}, {"algo", "atacom-sac"}, {"seed", s},
+    o.out_dir = (dir / ("runs/shelf/" + algo + "/seed-" + std::to_string(s))).string();
+    run_training(resolve_run_config(json{{"train", {{"env", "shelf"}, {"algo", algo}, {"seed", s},
                                                     {"steps", steps}, {"num_envs", 2}, {"eval_every", steps},
                                                     {"eval_episodes", 1}}}}),
                  o);
-  }
+  };
+  for (int s : {0, 1}) train("atacom-sac", s);
+  train("safelayer-sac", 0);
   fake_run(dir / "runs/shelf/atacom-sac/seed-2", steps);
-  for (int s : {0, 1, 2}) {
-    fake_run(dir / ("runs/shelf/safelayer-sac/seed-" + std::to_string(s)), steps);
-    fake_run(dir / ("runs/shelf/la-atacom/seed-" + std::to_string(s)), steps);
-  }
+  for (int s : {1, 2}) fake_run(dir / ("runs/shelf/safelayer-sac/seed-" + std::to_string(s)), steps);
+  for (int s : {0, 1, 2}) fake_run(dir / ("runs/shelf/la-atacom/seed-" + std::to_string(s)), steps);
   ReportOptions ro;
   ro.dir = dir.string();
   write_report(ro);
@@ -88,10 +89,30 @@ TEST_CASE("report: every finished shelf policy goes through the ShelfEnvReal pro
   // Not evaluated, with the reason.
   REQUIRE(by["atacom-sac/2"].size() == 1);
   CHECK(by["atacom-sac/2"][0].at("skipped").find("no policy_final.bin") != std::string::npos);
-  for (int s : {0, 1, 2}) {
+  // A SafeLayer policy goes through SafeLayer, as it trained.
+  {
+    const auto tp = TrainedPolicy::load((dir / "runs/shelf/safelayer-sac/seed-0").string());
+    ArmEnvConfig ec = default_arm_env_config(ArmTask::Shelf);
+    from_json(tp->config().env, ec);
+    ShelfRealConfig c = default_shelf_real_config();
+    c.layer = ShelfRealLayer::SafeLayer;
+    const ShelfRealResult want = evaluate_shelf_real(ec, c, *tp);
+    const auto& got = by["safelayer-sac/0"];
+    REQUIRE(got.size() == 2);
+    for (int t = 0; t < 2; ++t) {
+      CHECK(got[t].at("safety") == "safelayer");
+      CHECK(std::stod(got[t].at("final_error_mean")) == Approx(want.targets[t].final_error_mean).epsilon(1e-11));
+      CHECK(std::stoi(got[t].at("collisions")) == want.targets[t].collisions);
+      CHECK(got[t].at("skipped").empty());
+    }
+    // Not the ATACOM answer for the same policy (the layer was applied).
+    c.layer = ShelfRealLayer::Atacom;
+    CHECK(evaluate_shelf_real(ec, c, *tp).targets[0].final_error_mean != Approx(want.targets[0].final_error_mean));
+  }
+  for (int s : {1, 2}) {
     const auto& sl = by["safelayer-sac/" + std::to_string(s)];
     REQUIRE(sl.size() == 1);
-    CHECK(sl[0].at("skipped").find("SafeLayer") != std::string::npos);
+    CHECK(sl[0].at("skipped").find("no policy_final.bin") != std::string::npos);
   }
   // The attractor is deterministic: one evaluation (its first seed), through ATACOM, no collision.
   CHECK(by.count("la-atacom/1") == 0);
@@ -109,6 +130,7 @@ TEST_CASE("report: every finished shelf policy goes through the ShelfEnvReal pro
   CHECK(md.find("| la-atacom | atacom | 1 (deterministic) |") != std::string::npos);
   CHECK(md.find("| atacom-sac | atacom | 2 | ") != std::string::npos);
   CHECK(md.find("n = 2: no interval") != std::string::npos);
-  CHECK(md.find("- safelayer-sac (seeds 0, 1, 2): trained through SafeLayer") != std::string::npos);
+  CHECK(md.find("| safelayer-sac | safelayer | 1 | ") != std::string::npos);
+  CHECK(md.find("- safelayer-sac (seeds 1, 2): no policy") != std::string::npos);
   fs::remove_all(dir);
 }

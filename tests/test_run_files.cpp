@@ -152,6 +152,18 @@ TEST_CASE("run files: --config is a file for every subcommand, flags that do not
   // shelf-real: a file path (before this change: inline JSON only)
   CHECK(cli("shelf-real --policy zero --trials 2 --config " + cfg, log) == 0);
   CHECK(json::parse(slurp(log))["targets"].size() == 2);
+  // every layer: the policy through SafeLayer or CBF as well as ATACOM or none
+  for (const char* layer : {"none", "atacom", "safelayer", "cbf"}) {
+    INFO(layer);
+    CHECK(cli(std::string("shelf-real --policy la --trials 2 --safety ") + layer, log) == 0);
+    const json sr = json::parse(slurp(log));
+    CHECK(sr["safety"] == layer);
+    CHECK(sr["protocol"]["safety"] == layer);
+    CHECK(sr["protocol"]["atacom"] == (std::string(layer) == "atacom"));
+    CHECK(sr["protocol"].contains("cbf_gamma") == (std::string(layer) == "cbf"));
+  }
+  CHECK(cli("shelf-real --policy la --trials 2 --safety qp", log) != 0);
+  CHECK(slurp(log).find("--safety: qp not in {none,atacom,safelayer,cbf}") != std::string::npos);
   CHECK(cli("shelf-real --policy zero --trials 2 --config '{}'", log) != 0);
   CHECK(slurp(log).find("cannot read config file") != std::string::npos);
   CHECK(cli("shelf-real --policy zero --trials 2 --config " + fs::temp_directory_path().string(), log) != 0);

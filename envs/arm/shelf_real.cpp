@@ -5,10 +5,23 @@
 #include <stdexcept>
 
 #include "atacom/projector.hpp"
+#include "atacom/safelayer.hpp"
 
 namespace atacom {
 
 ShelfRealConfig default_shelf_real_config() { return ShelfRealConfig{}; }
+
+namespace {
+constexpr const char* kLayerNames[] = {"none", "atacom", "safelayer", "cbf"};  // ShelfRealLayer order
+}  // namespace
+
+const char* shelf_real_layer_name(ShelfRealLayer layer) { return kLayerNames[static_cast<int>(layer)]; }
+
+ShelfRealLayer parse_shelf_real_layer(const std::string& name) {
+  for (int i = 0; i < 4; ++i)
+    if (name == kLayerNames[i]) return static_cast<ShelfRealLayer>(i);
+  throw std::invalid_argument("shelf-real: layer '" + name + "' is not one of none, atacom, safelayer, cbf");
+}
 
 void to_json(nlohmann::json& j, const ShelfRealConfig& c) {
   j = {{"trials", c.trials},
@@ -16,8 +29,10 @@ void to_json(nlohmann::json& j, const ShelfRealConfig& c) {
        {"success_radius", c.success_radius},
        {"hold_time", c.hold_time},
        {"max_time_per_target", c.max_time_per_target},
-       {"atacom", c.atacom},
+       {"atacom", c.layer == ShelfRealLayer::Atacom},  // kept from before "safety": the same as safety == "atacom"
+       {"safety", shelf_real_layer_name(c.layer)},
        {"seed", c.seed}};
+  if (c.layer == ShelfRealLayer::Cbf) j["cbf_gamma"] = c.cbf_gamma;
 }
 
 void to_json(nlohmann::json& j, const ShelfRealResult& r) {
@@ -56,6 +71,9 @@ ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfR
                                 std::to_string(policy.obs_dim()) + "/" + std::to_string(policy.act_dim()) + ")");
   if (!(cfg.success_radius > 0.0 && cfg.hold_time >= 0.0 && cfg.max_time_per_target > cfg.hold_time))
     throw std::invalid_argument("shelf-real: need success_radius > 0 and max_time_per_target > hold_time >= 0");
+  if (cfg.layer == ShelfRealLayer::Cbf && !(std::isfinite(cfg.cbf_gamma) && cfg.cbf_gamma > 0.0))
+    throw std::invalid_argument("shelf-real: cbf_gamma must be a finite number > 0 (1/s; got " +
+                                std::to_string(cfg.cbf_gamma) + ")");
   ArmEnvConfig ec = env_config;
   // A run's config may carry any dt in (0, 1): bound the trial length, so a
   // tiny dt is an error, not an hours-long loop (or an int overflow).
@@ -73,6 +91,13 @@ ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfR
   env.seed(cfg.seed);
   const ProjectorModel pm = env.projector_model();
   ProjectorBatch pb(pm, N);
+  // SafeLayer linearises the rows over the env's control period; CBF is the
+  // same QP with period 1 / gamma (src/safety/safe_layer_env.cpp, cbf_env.cpp).
+  const bool qp = cfg.layer == ShelfRealLayer::SafeLayer || cfg.layer == ShelfRealLayer::Cbf;
+  const SafeLayerModel sm = qp ? safelayer_model(pm, cfg.layer == ShelfRealLayer::Cbf ? 1.0 / cfg.cbf_gamma : ec.dt)
+                               : SafeLayerModel{};
+  SafeLayerBatch qp_out;
+  if (qp) qp_out.resize(sm, N);
   const EnvSpec& spec = env.spec();
   const size_t ni = spec.info_names.size();
 
@@ -109,11 +134,16 @@ ShelfRealResult evaluate_shelf_real(const ArmEnvConfig& env_config, const ShelfR
       if (!active) break;
       obs = env.buffers().obs;
       policy.act(obs.data(), N, true, rngs.data(), action.data());
-      if (cfg.atacom) {
+      if (cfg.layer != ShelfRealLayer::None) {
         pb.alpha = action;
         env.constraint_model(pb, 0, N);
-        project_batch(pm, pb);
-        action = pb.a;
+        if (qp) {
+          safelayer_batch(sm, pb, qp_out);
+          action = qp_out.a;
+        } else {
+          project_batch(pm, pb);
+          action = pb.a;
+        }
       }
       // Envs that finished this target (or died) hold still.
       for (int e = 0; e < N; ++e)

@@ -8,10 +8,12 @@
 // Trials run as a batch of envs (one env per trial). Any Policy (a run's
 // trained policy, the arm's linear attractor, random, zero) is evaluated
 // with its deterministic action (trial i's noise, for policies that draw,
-// from stream (seed, 7 << 32 | i)); with atacom the ATACOM projector sits
-// between the policy's alpha and the env, exactly as in training.
+// from stream (seed, 7 << 32 | i)) through the layer it trained with,
+// exactly as in training: the ATACOM projector on alpha, or the SafeLayer /
+// CBF QP (include/atacom/safelayer.hpp) on the same rows, or none.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -21,13 +23,21 @@
 
 namespace atacom {
 
+// The layer between the policy and the arm ("none", "atacom", "safelayer",
+// "cbf": the safety layers' names).
+enum class ShelfRealLayer { None, Atacom, SafeLayer, Cbf };
+const char* shelf_real_layer_name(ShelfRealLayer layer);
+// Throws std::invalid_argument naming the allowed names for any other.
+ShelfRealLayer parse_shelf_real_layer(const std::string& name);
+
 struct ShelfRealConfig {
   int trials = 25;                     // the paper ran 25
   int targets = 2;
   double success_radius = 0.10;        // m
   double hold_time = 2.0;              // s inside the radius to count as success
   double max_time_per_target = 16.67;  // s
-  bool atacom = true;
+  ShelfRealLayer layer = ShelfRealLayer::Atacom;
+  double cbf_gamma = 10.0;             // 1/s, layer cbf only (the cbf layer's default gamma)
   uint64_t seed = 0;
 };
 ShelfRealConfig default_shelf_real_config();

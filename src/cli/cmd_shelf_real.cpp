@@ -12,6 +12,7 @@
 #include "src/core/limits.hpp"
 #include "envs/arm/arm_attractor.hpp"
 #include "envs/arm/shelf_real.hpp"
+#include "src/safety/cbf_env.hpp"
 
 namespace atacom::cli {
 namespace {
@@ -38,15 +39,13 @@ int run(const Options& o) {
   std::optional<SafetyLayer> layer;
   if (o.o_safety->count()) layer = parse_safety_layer(o.safety);
   else if (o.o_atacom->count()) layer = o.atacom == "on" ? SafetyLayer::Atacom : SafetyLayer::None;
-  if (layer && *layer == SafetyLayer::SafeLayer)
-    throw std::invalid_argument("shelf-real runs its policy through ATACOM or no layer (--safety atacom|none)");
 
   ArmEnvConfig ec = default_arm_env_config(ArmTask::Shelf);
   if (!o.config_file.empty()) from_json(merge_config_strict(nlohmann::json(ec), read_json_file(o.config_file)), ec);
   ShelfRealConfig c = default_shelf_real_config();
   c.trials = o.trials;
   c.seed = o.seed;
-  c.atacom = layer.value_or(SafetyLayer::Atacom) == SafetyLayer::Atacom;
+  c.layer = parse_shelf_real_layer(layer.value_or(SafetyLayer::Atacom).name());
   std::unique_ptr<Policy> policy;
   nlohmann::json run_info;
   if (trained) {
@@ -54,11 +53,11 @@ int run(const Options& o) {
     auto tp = TrainedPolicy::load(o.run_dir, o.which == "best" ? RunPolicy::Best : RunPolicy::Final);
     const TrainConfig& t = tp->config().train;
     if (t.env != "shelf") throw std::invalid_argument("run '" + o.run_dir + "' trained env '" + t.env + "', not shelf");
-    if (!layer && tp->safety() == SafetyLayer::SafeLayer)
-      throw std::invalid_argument("run '" + o.run_dir + "' trained through SafeLayer, which shelf-real does not run");
     // The protocol uses the run's env settings and, unless told otherwise, its layer.
     from_json(merge_config_strict(nlohmann::json(ec), tp->config().env), ec);
-    c.atacom = layer.value_or(tp->safety()) == SafetyLayer::Atacom;
+    c.layer = parse_shelf_real_layer(layer.value_or(tp->safety()).name());
+    // CBF's gamma: the run's own when it trained through CBF, else the layer's default.
+    if (tp->safety().name() == "cbf") c.cbf_gamma = tp->config().safety.value("gamma", kCbfDefaultGamma);
     run_info = {{"run", o.run_dir}, {"run_algo", t.algo}, {"run_safety", safety_layer_name(tp->safety())},
                 {"run_policy", run_policy_file(o.which == "best" ? RunPolicy::Best : RunPolicy::Final)}};
     policy = std::move(tp);
@@ -72,7 +71,7 @@ int run(const Options& o) {
   const ShelfRealResult r = evaluate_shelf_real(ec, c, *policy);
   nlohmann::json out = r;
   out["policy"] = o.policy;
-  out["safety"] = c.atacom ? "atacom" : "none";
+  out["safety"] = shelf_real_layer_name(c.layer);
   for (auto it = run_info.begin(); it != run_info.end(); ++it) out[it.key()] = it.value();
   out["protocol"] = c;
   std::cout << out.dump() << "\n";
@@ -91,9 +90,10 @@ const RegisterCommand reg{{"shelf-real",
                              app.add_option("--which", o->which, "final | best: the run's policy file (--policy trained)")
                                  ->check(CLI::IsMember({"final", "best"}));
                              o->o_safety = app.add_option("--safety", o->safety,
-                                                          "none | atacom (default atacom; with --policy trained the run's; "
-                                                          "the protocol has no SafeLayer variant)")
-                                               ->check(CLI::IsMember({"none", "atacom"}));
+                                                          "none | atacom | safelayer | cbf: the layer between the "
+                                                          "policy and the arm (default atacom; with --policy trained "
+                                                          "the run's, and a CBF run's gamma; else cbf's gamma 10)")
+                                               ->check(CLI::IsMember({"none", "atacom", "safelayer", "cbf"}));
                              o->o_atacom = app.add_option("--atacom", o->atacom, "on | off: the same as --safety atacom | none")
                                                ->check(CLI::IsMember({"on", "off"}));
                              add_integer_flag(app, "--trials", o->trials, range::closed(1, limits::kMaxShelfTrials),

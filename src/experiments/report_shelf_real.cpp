@@ -9,6 +9,7 @@
 #include "atacom/trainer.hpp"
 #include "envs/arm/arm_attractor.hpp"
 #include "src/core/config_json.hpp"
+#include "src/safety/cbf_env.hpp"
 #include "train/algorithms.hpp"
 
 namespace fs = std::filesystem;
@@ -39,20 +40,22 @@ ShelfRealSection shelf_real_section(const ReportData& d) {
     row.run = &r;
     row.safety = alg.safety.name();
     const std::string dir = (fs::path(d.opts.dir) / r.cell.run_dir()).string();
-    if (alg.safety != SafetyLayer::Atacom && !alg.safety.is_none()) {
-      row.skipped = std::string("trained through ") + alg.safety.title() +
-                    "; the protocol runs a policy through ATACOM or no layer, as on the robot of the paper";
-    } else if (alg.learns() && !fs::exists(fs::path(dir) / run_policy_file(RunPolicy::Final))) {
+    if (alg.learns() && !fs::exists(fs::path(dir) / run_policy_file(RunPolicy::Final))) {
       row.skipped = std::string("no ") + run_policy_file(RunPolicy::Final) + " in the run directory";
     } else {
+      // Through the layer the run trained with, and that layer's parameters
+      // (CBF's gamma) from the run's config.
       ShelfRealConfig c = s.protocol;
-      c.atacom = alg.safety == SafetyLayer::Atacom;
+      c.layer = parse_shelf_real_layer(alg.safety.name());
       try {
         if (alg.learns()) {
           auto tp = TrainedPolicy::load(dir, RunPolicy::Final);
+          if (c.layer == ShelfRealLayer::Cbf) c.cbf_gamma = tp->config().safety.value("gamma", kCbfDefaultGamma);
           row.result = evaluate_shelf_real(run_env_config(tp->config().env), c, *tp);
         } else {
           const nlohmann::json cfg = read_json_file((fs::path(dir) / "config.json").string(), "run config");
+          if (c.layer == ShelfRealLayer::Cbf)
+            c.cbf_gamma = cfg.value("cbf", nlohmann::json::object()).value("gamma", kCbfDefaultGamma);
           const ArmEnvConfig ec = run_env_config(cfg.value("env", nlohmann::json::object()));
           ArmAttractorPolicy la(ec);
           row.result = evaluate_shelf_real(ec, c, la);

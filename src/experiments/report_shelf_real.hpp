@@ -14,7 +14,7 @@ namespace atacom {
 
 struct ShelfRealRun {
   const ReportRun* run = nullptr;
-  std::string safety;   // the layer the protocol ran the policy through ("atacom", "none")
+  std::string safety;   // the layer the protocol ran the policy through ("none", "atacom", "safelayer", "cbf")
   std::string skipped;  // why the run was not evaluated (empty: evaluated)
   ShelfRealResult result;
 };
