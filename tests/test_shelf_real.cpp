@@ -97,8 +97,7 @@ TEST_CASE("shelf-real protocol: each layer acts as its training wrapper", "[shel
     for (int e = 0; e < N; ++e) rngs.emplace_back(c.seed, (uint64_t{7} << 32) | uint64_t(e));
     std::vector<double> action(size_t(N) * kArmJoints);
     for (int s = 0; s < steps; ++s) {
-      const std::vector<float> obs = env->buffers().obs;
-      la.act(obs.data(), N, true, rngs.data(), action.data());
+      la.act(env->buffers().obs.data(), N, true, rngs.data(), action.data());
       env->step(action.data());
       for (int e = 0; e < N; ++e) REQUIRE(!env->buffers().terminated[e]);
     }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 #include "atacom/projector.hpp"
@@ -18,7 +19,7 @@ constexpr const char* kLayerNames[] = {"none", "atacom", "safelayer", "cbf"};  /
 const char* shelf_real_layer_name(ShelfRealLayer layer) { return kLayerNames[static_cast<int>(layer)]; }
 
 ShelfRealLayer parse_shelf_real_layer(const std::string& name) {
-  for (int i = 0; i < 4; ++i)
+  for (size_t i = 0; i < std::size(kLayerNames); ++i)
     if (name == kLayerNames[i]) return static_cast<ShelfRealLayer>(i);
   throw std::invalid_argument("shelf-real: layer '" + name + "' is not one of none, atacom, safelayer, cbf");
 }

@@ -47,30 +47,30 @@ def test_hri_upright_probe_keeps_the_cup_upright():
     assert "episodes above 25 deg: 0 of 1" in r.stdout
 
 
-def test_hri_tilt_trace_reads_a_run(tmp_path, cli):
-    cfg = tmp_path / "hri.json"
+def tiny_run(tmp_path, cli, env):
+    """A 128-step atacom-ppo run on env (too short to learn): a run directory for the examples that read one."""
+    cfg = tmp_path / f"{env}.json"
     cfg.write_text(json.dumps({"ppo": {"actor": {"hidden": [8]}, "critic": {"hidden": [8]}, "minibatch_size": 32},
-                               "train": {"env": "hri", "algo": "atacom-ppo", "steps": 128, "num_envs": 4,
+                               "train": {"env": env, "algo": "atacom-ppo", "steps": 128, "num_envs": 4,
                                          "eval_every": 128, "eval_episodes": 1}}))
     rc, _, err = cli(["--threads", "1", "train", "--config", str(cfg), "--out", str(tmp_path / "run")])
     assert rc == 0, err
-    r = run("hri_tilt_trace.py", str(tmp_path / "run"), "--episodes", "2", "--steps", "12")
+    return str(tmp_path / "run")
+
+
+def test_hri_tilt_trace_reads_a_run(tmp_path, cli):
+    r = run("hri_tilt_trace.py", tiny_run(tmp_path, cli, "hri"), "--episodes", "2", "--steps", "12")
     assert r.returncode == 0, r.stdout + r.stderr
     assert "of 2; above 15 deg:" in r.stdout and "t= 10" in r.stdout
 
 
 def test_near_rows_reads_a_run(tmp_path, cli):
-    cfg = tmp_path / "table.json"
-    cfg.write_text(json.dumps({"ppo": {"actor": {"hidden": [8]}, "critic": {"hidden": [8]}, "minibatch_size": 32},
-                               "train": {"env": "table", "algo": "atacom-ppo", "steps": 128, "num_envs": 4,
-                                         "eval_every": 128, "eval_episodes": 1}}))
-    rc, _, err = cli(["--threads", "1", "train", "--config", str(cfg), "--out", str(tmp_path / "run")])
-    assert rc == 0, err
-    r = run("near_rows.py", str(tmp_path / "run"), "--episodes", "2", "--steps", "12", "--from-step", "4", "--top", "3")
+    run_dir = tiny_run(tmp_path, cli, "table")
+    r = run("near_rows.py", run_dir, "--episodes", "2", "--steps", "12", "--from-step", "4", "--top", "3")
     assert r.returncode == 0, r.stdout + r.stderr
     lines = r.stdout.splitlines()
     assert lines[0].startswith("atacom-ppo on table, 2 episodes, steps 4-11: share of steps with the row within 0.05")
     assert len(lines) >= 5 and all("mean c" in line for line in lines[1:4])
     assert lines[4].startswith("final distance: mean ")
-    r = run("near_rows.py", str(tmp_path / "run"), "--episodes", "2", "--steps", "12", "--from-step", "12")
+    r = run("near_rows.py", run_dir, "--episodes", "2", "--steps", "12", "--from-step", "12")
     assert r.returncode != 0 and "--from-step is 12, must be in [0, 11]" in r.stderr

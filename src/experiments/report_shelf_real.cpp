@@ -6,6 +6,7 @@
 #include <set>
 
 #include "atacom/env_registry.hpp"
+#include "atacom/safety_layer.hpp"
 #include "atacom/trainer.hpp"
 #include "envs/arm/arm_attractor.hpp"
 #include "src/core/config_json.hpp"
@@ -23,6 +24,14 @@ ArmEnvConfig run_env_config(const nlohmann::json& env_section) {
   ArmEnvConfig ec = default_arm_env_config(ArmTask::Shelf);
   from_json(merge_config_strict(nlohmann::json(ec), env_section), ec);
   return ec;
+}
+
+// The protocol through the layer a run trained with, with that layer's
+// parameters from the run's config (CBF's gamma; absent: the layer's default).
+ShelfRealConfig run_protocol(ShelfRealConfig c, SafetyLayer layer, const nlohmann::json& layer_params) {
+  c.layer = parse_shelf_real_layer(layer.name());
+  if (c.layer == ShelfRealLayer::Cbf) c.cbf_gamma = layer_params.value("gamma", kCbfDefaultGamma);
+  return c;
 }
 
 }  // namespace
@@ -43,22 +52,17 @@ ShelfRealSection shelf_real_section(const ReportData& d) {
     if (alg.learns() && !fs::exists(fs::path(dir) / run_policy_file(RunPolicy::Final))) {
       row.skipped = std::string("no ") + run_policy_file(RunPolicy::Final) + " in the run directory";
     } else {
-      // Through the layer the run trained with, and that layer's parameters
-      // (CBF's gamma) from the run's config.
-      ShelfRealConfig c = s.protocol;
-      c.layer = parse_shelf_real_layer(alg.safety.name());
       try {
         if (alg.learns()) {
           auto tp = TrainedPolicy::load(dir, RunPolicy::Final);
-          if (c.layer == ShelfRealLayer::Cbf) c.cbf_gamma = tp->config().safety.value("gamma", kCbfDefaultGamma);
-          row.result = evaluate_shelf_real(run_env_config(tp->config().env), c, *tp);
+          row.result = evaluate_shelf_real(run_env_config(tp->config().env),
+                                           run_protocol(s.protocol, alg.safety, tp->config().safety), *tp);
         } else {
           const nlohmann::json cfg = read_json_file((fs::path(dir) / "config.json").string(), "run config");
-          if (c.layer == ShelfRealLayer::Cbf)
-            c.cbf_gamma = cfg.value("cbf", nlohmann::json::object()).value("gamma", kCbfDefaultGamma);
           const ArmEnvConfig ec = run_env_config(cfg.value("env", nlohmann::json::object()));
           ArmAttractorPolicy la(ec);
-          row.result = evaluate_shelf_real(ec, c, la);
+          row.result = evaluate_shelf_real(
+              ec, run_protocol(s.protocol, alg.safety, cfg.value(alg.safety.name(), nlohmann::json::object())), la);
         }
       } catch (const std::exception& e) {
         row.skipped = e.what();
