@@ -111,6 +111,8 @@ TEST_CASE("report cost: cost metrics, the cost-return scatter, the training-cost
   CHECK(occurrences(tcost, ">sac-lag</text>") >= 2);  // legend and the curve's end
   CHECK(occurrences(tcost, ">la</text>") == 1);        // the legend only
   CHECK(scatter.find("(log scale)") != std::string::npos);  // training cost 0 .. 6000
+  CHECK(scatter.find("no finished run") == std::string::npos);
+  CHECK(tcost.find("no finished run") == std::string::npos);
   // The cost metrics are tables, boxes and P(improvement) rows.
   const std::string csv = slurp(rd + "summary.csv");
   CHECK(csv.find("table,sac-lag,train_cost,4,") != std::string::npos);
@@ -157,5 +159,34 @@ TEST_CASE("report cost: sac-lag and cbf-sac runs of a real sweep reach the repor
                           "nav,cbf-sac,eval_cost_mean,3,"})
     CHECK(csv.find(row) != std::string::npos);
   CHECK(occurrences(slurp((rd / "train_cost_nav.svg").string()), ">cbf-sac</text>") >= 2);
+  fs::remove_all(dir);
+}
+
+// Runs from a build before the cost keys (the paper comparison's 2M runs):
+// the cost figures say the key is missing instead of drawing empty axes.
+TEST_CASE("report cost: runs without cost keys get a note, not empty axes", "[report]") {
+  const std::string dir = (fs::temp_directory_path() / ("atacom_report_nocost_" + std::to_string(::getpid()))).string();
+  fs::remove_all(dir);
+  const SweepSpec spec = parse_sweep_spec(json::parse(R"({"envs": ["shelf"], "algos": ["sac", "atacom-sac"],
+      "seeds": [0, 1], "steps": 3000})"));
+  save_or_check_spec(dir, spec);
+  for (const SweepCell& c : sweep_cells(spec)) {
+    const fs::path run = fs::path(dir) / c.run_dir();
+    fs::create_directories(run);
+    const json sm = {{"env_steps", 3000}, {"eval_return_mean", -300.0 + double(c.seed)}, {"final_distance", 0.2}};
+    std::ofstream(run / "summary.json") << sm.dump(2);
+    std::ofstream(run / "progress.csv") << "env_steps,updates,wall_s,eval_return_mean,final_distance\n"
+                                        << "1000,0,0.1,-400,1\n3000,0,0.2,-300,0.5\n";
+  }
+  ReportOptions o;
+  o.dir = dir;
+  o.resamples = 200;
+  o.curve_resamples = 100;
+  REQUIRE(write_report(o).finished == 4);
+  const std::string scatter = slurp(dir + "/report/cost_return_shelf.svg");
+  const std::string tcost = slurp(dir + "/report/train_cost_shelf.svg");
+  CHECK(scatter.find("no finished run of shelf records eval_cost_mean") != std::string::npos);
+  CHECK(scatter.find("no finished run of shelf records train_cost") != std::string::npos);
+  CHECK(tcost.find("no finished run of shelf records train_cost") != std::string::npos);
   fs::remove_all(dir);
 }
