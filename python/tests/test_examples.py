@@ -74,3 +74,21 @@ def test_near_rows_reads_a_run(tmp_path, cli):
     assert lines[4].startswith("final distance: mean ")
     r = run("near_rows.py", run_dir, "--episodes", "2", "--steps", "12", "--from-step", "12")
     assert r.returncode != 0 and "--from-step is 12, must be in [0, 11]" in r.stderr
+
+
+def test_same_run_tells_a_rerun_from_a_different_run(tmp_path, cli):
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    run_a, run_b = tiny_run(a, cli, "table"), tiny_run(b, cli, "table")
+    r = run("same_run.py", run_b, run_a)
+    assert r.returncode == 0 and "1 of 1 the same" in r.stdout, r.stdout + r.stderr
+    # a wall time differs: still the same run; a learning number differs: not
+    summary = json.loads(open(os.path.join(run_b, "summary.json")).read())
+    summary["wall_s"] = summary["wall_s"] + 1.0
+    open(os.path.join(run_b, "summary.json"), "w").write(json.dumps(summary))
+    assert run("same_run.py", run_b, run_a).returncode == 0
+    summary["eval_return_mean"] = summary["eval_return_mean"] + 1e-9
+    open(os.path.join(run_b, "summary.json"), "w").write(json.dumps(summary))
+    r = run("same_run.py", run_b, run_a)
+    assert r.returncode == 1 and "DIFFERENT: summary.json eval_return_mean" in r.stdout, r.stdout

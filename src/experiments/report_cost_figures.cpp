@@ -44,11 +44,20 @@ struct Point {
   double x, y;
 };
 
-// What an empty panel says: the runs' summaries lack the key (runs from
-// builds before the cost keys), not that they paid nothing.
-void note_missing(SvgCanvas& c, double pw, double ph, const std::string& env, const std::string& key) {
-  c.label(pw / 2, ph / 2, "no finished run of " + env + " records " + key + " (a build before the cost keys)", 11,
-          "middle", "#888");
+// Whether any finished run of env has the key in its summary.json. When none
+// has (runs from builds before the cost keys) the panel says so instead of
+// showing empty axes, which would read as "paid nothing".
+bool any_run_records(const ReportData& d, const std::string& env, const std::string& key) {
+  return std::any_of(d.runs.begin(), d.runs.end(), [&](const ReportRun& r) {
+    return r.finished && r.cell.env == env && metric_value(r.summary, key).has_value();
+  });
+}
+
+void note_if_unrecorded(SvgCanvas& c, double pw, double ph, const ReportData& d, const std::string& env,
+                        const std::string& key) {
+  if (!any_run_records(d, env, key))
+    c.label(pw / 2, ph / 2, "no finished run of " + env + " records " + key + " (a build before the cost keys)", 11,
+            "middle", "#888");
 }
 
 // One scatter panel: a point per finished run of each algorithm at
@@ -100,8 +109,7 @@ SvgCanvas scatter_panel(const ReportData& d, const std::string& env, const std::
     c.polyline({{mx - hx, my}, {mx, my + 1.6 * dy}, {mx + hx, my}, {mx, my - 1.6 * dy}, {mx - hx, my}}, "#000", 0.8);
     c.text(mx + 1.5 * hx, my + 0.4 * dy, d.algos[i], 9, "start", "#222");
   }
-  if (std::all_of(pts.begin(), pts.end(), [](const std::vector<Point>& p) { return p.empty(); }))
-    note_missing(c, pw, ph, env, x_key);
+  note_if_unrecorded(c, pw, ph, d, env, x_key);
   return c;
 }
 
@@ -187,8 +195,7 @@ std::string train_cost_svg(const ReportData& d, const std::string& env) {
     // the name at the curve's end
     c.text(s.x.back(), s.mid.back(), d.algos[i], 9, "end", col);
   }
-  if (std::all_of(series.begin(), series.end(), [](const Series& s) { return s.x.empty(); }))
-    note_missing(c, pw, ph, env, "train_cost");
+  note_if_unrecorded(c, pw, ph, d, env, "train_cost");
   return svg_figure(pw, top + ph, env + ": training cost (steps with cost 1, all training envs)", d.algos, dashed,
                     svg_placed(c, 0, top));
 }
