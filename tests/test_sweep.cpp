@@ -1,7 +1,9 @@
 // atacom sweep: the spec's strictness, the cells, and the promise that a
 // sweep killed at any moment (kill -9) and rerun ends with the run files of
 // an uninterrupted one.
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -131,6 +133,75 @@ TEST_CASE("sweep: cells in spec order, overrides least specific first", "[sweep]
   REQUIRE(!cells[4].learns);
   Shard s{1, 4};
   REQUIRE((!s.holds(0) && s.holds(1) && s.holds(5) && !s.holds(6)));
+}
+
+// The scan by directory listings (cell_statuses) must find what probing every
+// cell finds (cell_status): done, partial, failed, interrupted, running (a
+// held lock) and a link in place of an algo's directory, among untouched cells.
+TEST_CASE("sweep: the listing scan of all cells equals cell_status of each", "[sweep]") {
+  json j = small_spec();
+  j["seeds"] = json::array();
+  for (int s = 0; s < 12; ++s) j["seeds"].push_back(s);
+  const std::vector<SweepCell> cells = sweep_cells(parse_sweep_spec(j));
+  const std::string dir = tmp_dir("scan_listing"), elsewhere = tmp_dir("scan_listing_elsewhere");
+  prepare_sweep_dirs(dir);
+  auto put = [](const fs::path& p, const std::string& text) {
+    fs::create_directories(p.parent_path());
+    std::ofstream(p) << text;
+  };
+  auto cell = [&](const std::string& algo, int seed) {
+    for (const SweepCell& c : cells)
+      if (c.algo == algo && c.seed == seed) return c;
+    FAIL("no cell " << algo << " " << seed);
+    return cells[0];
+  };
+  const fs::path d(dir);
+  put(d / cell("sac", 0).run_dir() / "summary.json", R"({"env_steps": 2000})");
+  put(d / cell("sac", 1).run_dir() / "summary.json", R"({"env_steps": 1000})");
+  put(d / cell("sac", 1).run_dir() / "progress.csv", "env_steps,x\n500,1\n1000,2\n");
+  put(d / cell("atacom-sac", 2).run_dir() / "checkpoint.bin", "x");
+  put(d / cell("atacom-sac", 2).run_dir() / "config.json", "{}");
+  put(d / cell_state_rel(cell("atacom-sac", 3), ".json"), R"({"state": "failed", "attempts": 2, "exit_code": 3})");
+  put(d / cell_state_rel(cell("atacom-sac", 4), ".json"), R"({"state": "running", "attempts": 1, "host": "h"})");
+  put(d / cell_state_rel(cell("sac", 5), ".lock"), "");
+  const int held = ::open((d / cell_state_rel(cell("sac", 5), ".lock")).c_str(), O_RDWR);
+  REQUIRE(held >= 0);
+  // Another process holds the lock: flock from a child, which waits for a pipe.
+  int go[2];
+  REQUIRE(::pipe(go) == 0);
+  const pid_t kid = ::fork();
+  if (kid == 0) {
+    ::close(go[1]);
+    const int fd = ::open((d / cell_state_rel(cell("sac", 5), ".lock")).c_str(), O_RDWR);
+    ::flock(fd, LOCK_EX);
+    char b;
+    (void)::read(go[0], &b, 1);
+    ::_exit(0);
+  }
+  ::close(go[0]);
+  put(fs::path(elsewhere) / "seed-6" / "summary.json", R"({"env_steps": 2000})");
+  fs::create_directories(d / "runs" / "table");
+  fs::create_directory_symlink(elsewhere, d / "runs" / "table" / "la");
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the child has the lock by now
+
+  const std::vector<CellStatus> listed = cell_statuses(dir, cells);
+  REQUIRE(listed.size() == cells.size());
+  std::map<std::string, int> counts;
+  for (size_t k = 0; k < cells.size(); ++k) {
+    INFO(cells[k].name());
+    CHECK(sweep_row(cells[k], listed[k]).dump() == sweep_row(cells[k], cell_status(dir, cells[k])).dump());
+    ++counts[listed[k].state];
+  }
+  ::close(go[1]);
+  ::waitpid(kid, nullptr, 0);
+  ::close(held);
+  CHECK(counts["done"] == 1);  // sac 0; not la 6, whose summary is behind a link
+  CHECK(counts["partial"] == 1);
+  CHECK(counts["failed"] == 1);
+  CHECK(counts["interrupted"] == 1);
+  CHECK(counts["running"] == 1);
+  fs::remove_all(dir);
+  fs::remove_all(elsewhere);
 }
 
 // Kill moments, deterministic: in pass n every run the sweep starts (fresh or

@@ -172,9 +172,7 @@ int run_sweep_local(const SweepSpec& spec, const SweepLocalOptions& opts) {
   // started or ended) updates its own cell only: O(1) per event, whatever
   // the number of cells. sweep.json is rebuilt from this table every few
   // seconds (at most a tenth of the time) and from the files at the end.
-  std::vector<CellStatus> table;
-  table.reserve(cells.size());
-  for (const SweepCell& c : cells) table.push_back(cell_status(dir, c));
+  std::vector<CellStatus> table = cell_statuses(dir, cells);
   std::deque<size_t> queue;
   std::vector<int64_t> steps_of(cells.size(), 0);  // env steps of each of my cells as last seen
   int64_t all_steps = 0, steps_seen = 0;
