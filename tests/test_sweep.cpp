@@ -164,25 +164,30 @@ TEST_CASE("sweep: the listing scan of all cells equals cell_status of each", "[s
   put(d / cell_state_rel(cell("atacom-sac", 3), ".json"), R"({"state": "failed", "attempts": 2, "exit_code": 3})");
   put(d / cell_state_rel(cell("atacom-sac", 4), ".json"), R"({"state": "running", "attempts": 1, "host": "h"})");
   put(d / cell_state_rel(cell("sac", 5), ".lock"), "");
-  const int held = ::open((d / cell_state_rel(cell("sac", 5), ".lock")).c_str(), O_RDWR);
-  REQUIRE(held >= 0);
-  // Another process holds the lock: flock from a child, which waits for a pipe.
-  int go[2];
-  REQUIRE(::pipe(go) == 0);
+  // Another process holds the lock: a child takes it, says so on one pipe,
+  // and keeps it until the other pipe closes.
+  int locked[2], go[2];
+  REQUIRE((::pipe(locked) == 0 && ::pipe(go) == 0));
   const pid_t kid = ::fork();
   if (kid == 0) {
     ::close(go[1]);
+    ::close(locked[0]);
     const int fd = ::open((d / cell_state_rel(cell("sac", 5), ".lock")).c_str(), O_RDWR);
-    ::flock(fd, LOCK_EX);
+    const char ok = fd >= 0 && ::flock(fd, LOCK_EX) == 0 ? 'y' : 'n';
+    (void)::write(locked[1], &ok, 1);
     char b;
     (void)::read(go[0], &b, 1);
     ::_exit(0);
   }
   ::close(go[0]);
+  ::close(locked[1]);
+  char ok = 0;
+  REQUIRE(::read(locked[0], &ok, 1) == 1);
+  REQUIRE(ok == 'y');
+  ::close(locked[0]);
   put(fs::path(elsewhere) / "seed-6" / "summary.json", R"({"env_steps": 2000})");
   fs::create_directories(d / "runs" / "table");
   fs::create_directory_symlink(elsewhere, d / "runs" / "table" / "la");
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the child has the lock by now
 
   const std::vector<CellStatus> listed = cell_statuses(dir, cells);
   REQUIRE(listed.size() == cells.size());
@@ -194,7 +199,6 @@ TEST_CASE("sweep: the listing scan of all cells equals cell_status of each", "[s
   }
   ::close(go[1]);
   ::waitpid(kid, nullptr, 0);
-  ::close(held);
   CHECK(counts["done"] == 1);  // sac 0; not la 6, whose summary is behind a link
   CHECK(counts["partial"] == 1);
   CHECK(counts["failed"] == 1);

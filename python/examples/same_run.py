@@ -3,7 +3,7 @@
 
 Compares progress.csv row by row and summary.json key by key, leaving out
 only the wall-clock fields (docs/sweeps.md, "The sweep directory": wall_s,
-time_to_target_s, eval_wall_s, eval_share). The reference's columns and keys
+time_to_target_s, eval_wall_s, eval_share) and the machine's name (host). The reference's columns and keys
 are what must agree: a retrained run may add keys a newer build writes (runs
 made before issue 32 lack eval_cost_mean and train_cost). Exits 0 when every
 pair agrees, 1 otherwise. docs/sweeps.md ("When the machine is replaced")

@@ -24,14 +24,6 @@ namespace atacom {
 
 namespace {
 
-// True when nothing is at base/rel (lstat: ENOENT). Absence needs no link-safe
-// walk: one syscall where open_below's walk takes six, for the cells of a large
-// sweep that never ran (a 60,000-cell scan went from 3 s to a fraction).
-bool absent(const std::string& base, const std::string& rel) {
-  struct stat st;
-  return ::lstat((fs::path(base) / rel).c_str(), &st) != 0 && errno == ENOENT;
-}
-
 // The names in directory d, or nullopt when it has more than max_entries
 // (a received directory of millions of files costs no unbounded memory: the
 // caller probes cell by cell instead). A missing directory lists as empty.
@@ -89,7 +81,6 @@ std::string cell_state_path(const std::string& sweep_dir, const SweepCell& c, co
 std::string cell_log_path(const SweepCell& c) { return "logs/" + c.name() + ".log"; }
 
 CellRecord read_cell_record(const std::string& sweep_dir, const SweepCell& c) {
-  if (absent(sweep_dir, cell_state_rel(c, ".json"))) return {};
   const std::optional<std::string> text = read_below(sweep_dir, cell_state_rel(c, ".json"), kMaxCellStateBytes);
   if (!text) return {};
   // Atomic writes make an unreadable record rare (a hand edit, a received directory); the run files still decide "done".
@@ -102,7 +93,6 @@ void write_cell_state(const std::string& sweep_dir, const SweepCell& c, const nl
 }
 
 int64_t run_progress_steps(const std::string& sweep_dir, const SweepCell& c) {
-  if (absent(sweep_dir, c.run_dir())) return 0;
   // The last row is all this needs: the file's tail, never the whole of a large one.
   const std::optional<std::string> text =
       read_below(sweep_dir, c.run_dir() + "/progress.csv", kProgressTailBytes, nullptr, true);
@@ -119,7 +109,6 @@ int64_t run_progress_steps(const std::string& sweep_dir, const SweepCell& c) {
 
 std::string run_files_state(const std::string& sweep_dir, const SweepCell& c) {
   const std::string run = c.run_dir();
-  if (absent(sweep_dir, run)) return "fresh";
   if (const std::optional<std::string> text = read_below(sweep_dir, run + "/summary.json", kMaxSummaryBytes)) {
     try {
       const nlohmann::json s = parse_json_strict(*text, "summary file");
@@ -140,7 +129,6 @@ std::string run_files_state(const std::string& sweep_dir, const SweepCell& c) {
 }
 
 bool cell_locked_elsewhere(const std::string& sweep_dir, const SweepCell& c) {
-  if (absent(sweep_dir, cell_state_rel(c, ".lock"))) return false;
   const int fd = open_below(sweep_dir, cell_state_rel(c, ".lock"), O_RDONLY, nullptr);
   if (fd < 0) return false;
   const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;

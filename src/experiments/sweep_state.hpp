@@ -76,7 +76,7 @@ bool cell_locked_elsewhere(const std::string& sweep_dir, const SweepCell& c);
 CellStatus cell_status(const std::string& sweep_dir, const SweepCell& c);
 // cell_status of every cell, in order. Listings of state/ and of each
 // runs/<env>/<algo>/ find the cells with files; the others are pending
-// without a syscall each (a 60,000-cell sweep of a few runs scans in a blink).
+// without a syscall each (measured in docs/sweeps.md, "How many cells").
 std::vector<CellStatus> cell_statuses(const std::string& sweep_dir, const std::vector<SweepCell>& cells);
 
 // One row of sweep.json: {name, env, algo, seed, dir, state, env_steps, steps, log, attempts[, exit_code][, host]}.
