@@ -8,6 +8,9 @@
 #include "atacom/projector.hpp"
 #include "envs/arm/arm_env.hpp"
 #include "envs/arm/arm_learned_sdf.hpp"
+#include "src/core/data_dir.hpp"
+#include "src/core/redsdf_model.hpp"
+#include "tests/test_files.hpp"
 #include "train/rollout.hpp"
 
 using namespace atacom;
@@ -75,6 +78,30 @@ TEST_CASE("bad learned-field settings fail at construction with the key named", 
   CHECK(sdf_flag_override("table", "learned") == nlohmann::json{{"sdf", {{"table", "learned"}, {"tiago", "learned"}}}});
   CHECK(sdf_flag_override("nav", "analytic").empty());
   CHECK_THROWS_WITH(sdf_flag_override("nav", "learned"), Catch::Contains("no field with a shipped learned model"));
+}
+
+// A process samples the goal library once per config and field weights
+// (ArmModel::build_libraries): a field rewritten in the same directory is a
+// new key, so the library follows the weights, never an earlier file's.
+TEST_CASE("arm goal library: sampled once per config and field, a field rewritten in place samples anew",
+          "[arm_env][redsdf]") {
+  const std::string dir = tmp_dir("goal_library_field");
+  const RedsdfModel shipped = load_redsdf(data_dir() + "/sdf/table", "table");
+  save_redsdf(shipped, dir);
+  const ArmEnvConfig c = config_with(ArmTask::Table, "learned:" + dir);
+  const ArmEnv first(c, 1), again(c, 1);
+  REQUIRE(!first.arm_model()->goal_lib_q.empty());
+  CHECK(again.arm_model()->goal_lib_q == first.arm_model()->goal_lib_q);
+  // A wider margin keeps the library's candidates further from the table: another library.
+  RedsdfModel wide = shipped;
+  wide.manifest["safety_margin"] = shipped.manifest["safety_margin"].get<double>() + 0.02;
+  save_redsdf(wide, dir);
+  const ArmEnv wider(c, 1);
+  CHECK(wider.arm_model()->goal_lib_q != first.arm_model()->goal_lib_q);
+  // Back to the first weights: the first library again.
+  save_redsdf(shipped, dir);
+  CHECK(ArmEnv(c, 1).arm_model()->goal_lib_q == first.arm_model()->goal_lib_q);
+  std::filesystem::remove_all(dir);
 }
 
 // --sdf learned: the obstacle's and the robot body's learned fields together.

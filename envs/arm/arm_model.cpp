@@ -3,10 +3,13 @@
 #include "envs/arm/arm_model.hpp"
 
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 
 #include "envs/arm/arm_kernels.hpp"
 #include "envs/arm/arm_learned_sdf.hpp"
+#include "src/core/binary_io.hpp"
 #include "src/core/env_target.hpp"
 
 namespace atacom {
@@ -53,9 +56,76 @@ ArmModel::ArmModel(const ArmEnvConfig& cfg)
   if (home.c.maxCoeff() > -config.init_margin || home.collision)
     throw std::invalid_argument("config.home is not a safe start (max constraint " + std::to_string(home.c.maxCoeff()) +
                                 (home.collision ? ", in collision" : "") + "); choose another home configuration");
+  build_libraries();
+  build_spec();
+}
+
+namespace {
+// The goal and start libraries are a function of the validated config and
+// the learned fields' weights (each library has its own seed), and sampling
+// them is most of an hri env's construction (0.3 s in Release, 6 s under the
+// sanitizers): a process samples each once. The key holds the config's JSON
+// and a hash of every learned field, so a field retrained into the same
+// directory is a new key; the robot and human data are shipped files, read
+// once per process anyway. At most kMaxEntries configs are kept.
+struct Libraries {
+  std::vector<double> goal_q, start_q;
+  std::vector<Eigen::Vector3d> goal_p;
+};
+constexpr size_t kMaxEntries = 32;
+std::mutex libraries_mutex;
+std::map<std::string, std::shared_ptr<const Libraries>>& library_cache() {
+  static std::map<std::string, std::shared_ptr<const Libraries>> cache;
+  return cache;
+}
+
+void hash_field(uint64_t& h, const RedsdfModel* m, double margin, const double* extra, size_t n_extra) {
+  if (m == nullptr) {
+    h = bin::fnv1a("-", 1, h);
+    return;
+  }
+  const std::string manifest = m->manifest.dump();
+  h = bin::fnv1a(manifest.data(), manifest.size(), h);
+  h = bin::fnv1a(m->params.data(), m->params.size() * sizeof(float), h);
+  h = bin::fnv1a(&margin, sizeof margin, h);
+  h = bin::fnv1a(extra, n_extra * sizeof(double), h);
+}
+}  // namespace
+
+void ArmModel::build_libraries() {
+  uint64_t h = bin::kFnv1aSeed;
+  for (const LearnedObstacle* f : {learned.get(), learned_body.get()}) {
+    if (f == nullptr) {
+      hash_field(h, nullptr, 0.0, nullptr, 0);
+      continue;
+    }
+    std::vector<double> frame(f->R.data(), f->R.data() + 9);
+    frame.insert(frame.end(), f->t.data(), f->t.data() + 3);
+    for (float x : f->pose) frame.push_back(double(x));
+    hash_field(h, f->model.get(), f->margin, frame.data(), frame.size());
+  }
+  hash_field(h, learned_human ? learned_human->model.get() : nullptr, learned_human ? learned_human->margin : 0.0,
+             nullptr, 0);
+  const std::string key = std::to_string(int(config.task)) + "#" + nlohmann::json(config).dump() + "#" + std::to_string(h);
+  {
+    std::lock_guard<std::mutex> lock(libraries_mutex);
+    const auto it = library_cache().find(key);
+    if (it != library_cache().end()) {
+      goal_lib_q = it->second->goal_q;
+      goal_lib_p = it->second->goal_p;
+      start_lib_q = it->second->start_q;
+      return;
+    }
+  }
   build_goal_library();
   build_start_library();
-  build_spec();
+  auto entry = std::make_shared<Libraries>();
+  entry->goal_q = goal_lib_q;
+  entry->goal_p = goal_lib_p;
+  entry->start_q = start_lib_q;
+  std::lock_guard<std::mutex> lock(libraries_mutex);
+  if (library_cache().size() >= kMaxEntries) library_cache().clear();
+  library_cache().emplace(key, std::move(entry));
 }
 
 void ArmModel::build_kernel_tables() {

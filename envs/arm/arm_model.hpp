@@ -107,6 +107,7 @@ struct ArmModel {
 
  private:
   void build_kernel_tables();
+  void build_libraries();  // the two below, or their copies from an earlier model of the same config
   void build_goal_library();
   void build_start_library();
   void build_spec();
