@@ -439,7 +439,7 @@ TEST_CASE("hri-upright: random alpha through ATACOM spills only where the projec
     const double row_angle = h.at("theta_max").get<double>() - h.at("upright").at("margin")[0].get<double>();
     const double tol = h.at("upright").at("tolerance")[0].get<double>();
     n.edge_deg = std::acos(std::cos(row_angle) - tol) * 180.0 / M_PI;
-    const int N = 128, steps = 1000;  // two episodes per env
+    const int N = sanitizer_scaled(128, 2), steps = 1000;  // two episodes per env
     auto env = make_env({"hri-upright", N, SafetyLayer::Atacom, cfg});
     env->seed(11);
     const EnvSpec& s = env->spec();
