@@ -67,13 +67,15 @@ namespace {
 // sanitizers): a process samples each once. The key holds the config's JSON
 // and a hash of every learned field, so a field retrained into the same
 // directory is a new key; the robot and human data are shipped files, read
-// once per process anyway. At most kMaxEntries configs are kept.
+// once per process anyway. The copies kept are bounded in bytes (a library
+// may hold 2^20 goals, 136 MB): at most kMaxBytes, the cache emptied when full.
 struct Libraries {
   std::vector<double> goal_q, start_q;
   std::vector<Eigen::Vector3d> goal_p;
 };
-constexpr size_t kMaxEntries = 32;
+constexpr size_t kMaxBytes = size_t(64) << 20;
 std::mutex libraries_mutex;
+size_t cached_bytes = 0;  // guarded by libraries_mutex
 std::map<std::string, std::shared_ptr<const Libraries>>& library_cache() {
   static std::map<std::string, std::shared_ptr<const Libraries>> cache;
   return cache;
@@ -119,13 +121,19 @@ void ArmModel::build_libraries() {
   }
   build_goal_library();
   build_start_library();
+  const size_t bytes = (goal_lib_q.size() + start_lib_q.size()) * sizeof(double) +
+                       goal_lib_p.size() * sizeof(Eigen::Vector3d) + key.size();
+  if (bytes > kMaxBytes) return;
   auto entry = std::make_shared<Libraries>();
   entry->goal_q = goal_lib_q;
   entry->goal_p = goal_lib_p;
   entry->start_q = start_lib_q;
   std::lock_guard<std::mutex> lock(libraries_mutex);
-  if (library_cache().size() >= kMaxEntries) library_cache().clear();
-  library_cache().emplace(key, std::move(entry));
+  if (cached_bytes + bytes > kMaxBytes) {
+    library_cache().clear();
+    cached_bytes = 0;
+  }
+  if (library_cache().emplace(key, std::move(entry)).second) cached_bytes += bytes;
 }
 
 void ArmModel::build_kernel_tables() {
