@@ -114,7 +114,7 @@ TEST_CASE("batched step equals the per-env scalar reference", "[arm_env]") {
     Rng rng(4, 0);
     ProjectorBatch pb(env.projector_model(), N);
     int checked = 0, collisions = 0;
-    // Half the steps under the sanitizers (a quarter of a million CHECKs a step): still collisions and resets.
+    // Half the steps under the sanitizers (about 19,000 CHECKs a step): still collisions and resets.
     for (int s = 0; s < sanitizer_scaled(100, 2); ++s) {
       const auto a = random_arm_actions(rng, N);
       std::vector<double> q_before = env.q();
