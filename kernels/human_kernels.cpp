@@ -13,7 +13,6 @@ using lanes::kLanes;
 using lanes::vd;
 
 namespace {
-constexpr int kCapStride = kHumanCapsules * 6;  // doubles per env in cap / cap_vel
 }
 
 void HumanBatch::resize(int n) {
@@ -22,8 +21,8 @@ void HumanBatch::resize(int n) {
   const size_t sn = static_cast<size_t>(n);
   pose.assign(sn * kHumanPoseDim, 0.0);
   pose_rate.assign(sn * kHumanPoseDim, 0.0);
-  cap.assign(sn * kCapStride, 0.0);
-  cap_vel.assign(sn * kCapStride, 0.0);
+  cap.assign(sn * kHumanCapStride, 0.0);
+  cap_vel.assign(sn * kHumanCapStride, 0.0);
 }
 
 void human_capsules_range(const HumanFkConst& k, HumanBatch& B, int begin, int end, bool with_velocity) {
@@ -45,7 +44,7 @@ void human_rows_range(const HumanRowsConst& k, const HumanFkConst& hk, const Hum
   for (int e0 = begin; e0 < end; e0 += kLanes) {
     const int cnt = std::min(kLanes, end - e0);
     lanes::HumanCapsLanes h;
-    lanes::human_load_caps_lanes(&B.cap[static_cast<size_t>(e0) * kCapStride], &B.cap_vel[static_cast<size_t>(e0) * kCapStride],
+    lanes::human_load_caps_lanes(&B.cap[static_cast<size_t>(e0) * kHumanCapStride], &B.cap_vel[static_cast<size_t>(e0) * kHumanCapStride],
                                  cnt, h);
     vd p[kHumanMaxPoi][3], Jp[kHumanMaxPoi][3][kHumanMaxNq];
     const int ps = P * 3, js = P * 3 * nq;
@@ -87,7 +86,7 @@ void human_contact_range(const HumanBatch& B, const HumanFkConst& k, const doubl
         (k.cap_inv_len2[c] > 0.0 ? 0.5 / std::sqrt(k.cap_inv_len2[c]) : 0.0) + k.cap_radius[c];
   for (int e = begin; e < end; ++e) {
     const size_t se = static_cast<size_t>(e);
-    const double* cap = &B.cap[se * kCapStride];
+    const double* cap = &B.cap[se * kHumanCapStride];
     const double* it = items + se * static_cast<size_t>(n_items) * 6;
     vd cm[2][3];  // capsule midpoints, 8 capsules per vector
     for (int c = 0; c < kHumanCapsules; ++c)

@@ -20,6 +20,7 @@ namespace atacom {
 
 inline constexpr int kHumanJoints = 20;    // joints of data/human_skeleton.json (root = pelvis)
 inline constexpr int kHumanCapsules = 16;  // segments of data/human_skeleton.json
+inline constexpr int kHumanCapStride = kHumanCapsules * 6;  // doubles per env in cap / cap_vel: a, b of each capsule
 inline constexpr int kHumanDofs = 34;      // joint angles (data/human_dofs.json)
 inline constexpr int kHumanRootDofs = 4;   // x, y, z, yaw
 inline constexpr int kHumanPoseDim = kHumanRootDofs + kHumanDofs;

@@ -26,8 +26,6 @@ namespace atacom::safelayer_qp {
 
 namespace {
 
-constexpr double kTol = kSafeLayerFeasTol;
-constexpr double kBoxSlack = 1e-9;   // LDP result outside the box by less than this is clipped
 constexpr double kDualTol = 1e-12;   // NNLS: a column enters when its dual exceeds this (relative to its norm)
 constexpr double kRankTol = 1e-11;   // Householder: a column this close to the span of the others is dependent
 constexpr int kNewtonMax = 60;

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "atacom/safelayer.hpp"
+
 namespace atacom::safelayer_qp {
 
 // Scratch sized once per thread and shape (grow only): no allocation per solve.
@@ -27,6 +29,11 @@ struct Result {
 // The exact QP for m <= 2 (kernels/safelayer_qp_planar.cpp) uses at most
 // this many kept rows; beyond, the candidate vertices outnumber NNLS's work.
 constexpr int kPlanarMaxRows = 16;
+
+// Feasibility tolerance on the raw rows, and the slack by which a solution may
+// leave the box [-1, 1]^m before it is clipped (both paths check the same way).
+constexpr double kTol = kSafeLayerFeasTol;
+constexpr double kBoxSlack = 1e-9;
 
 struct Options {
   bool planar = true;  // false: NNLS for every m (tests compare the two)

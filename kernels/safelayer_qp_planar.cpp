@@ -27,8 +27,6 @@ namespace atacom::safelayer_qp {
 
 namespace {
 
-constexpr double kTol = kSafeLayerFeasTol;
-constexpr double kBoxSlack = 1e-9;
 constexpr double kParallel = 1e-12;  // |sin| of the angle below which two lines count as parallel
 // A vertex of lines closer than this to parallel is ill-conditioned (its
 // rounding error ~ 1e-16 / |sin| nears the tolerance): when no candidate is

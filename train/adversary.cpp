@@ -7,12 +7,12 @@
 
 #include "src/core/binary_io.hpp"
 #include "src/core/config_json.hpp"
+#include "src/core/json_number.hpp"
 
 namespace atacom {
 
 namespace {
 constexpr uint32_t kTagAdversary = 0x41445652;  // "ADVR"
-nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 }  // namespace
 
 AdversaryConfig default_adversary_config() {
@@ -284,5 +284,4 @@ std::unique_ptr<Learner> make_adversary_learner(const LearnerContext& ctx, const
 std::unique_ptr<Policy> make_adversary_policy(const EnvSpec& spec, const nlohmann::json& resolved) {
   return std::make_unique<SacPolicy>(spec, resolved.get<AdversaryConfig>().sac);
 }
-
 }  // namespace atacom

@@ -11,12 +11,12 @@ namespace atacom {
 
 namespace {
 
-constexpr char kMagic[8] = {'A', 'T', 'A', 'C', 'K', 'P', 'T', '\0'};
+constexpr char kCheckpointMagic[8] = {'A', 'T', 'A', 'C', 'K', 'P', 'T', '\0'};
 
 }  // namespace
 
 void write_checkpoint_atomic(const std::string& path, const Checkpoint& ckpt) {
-  ContainerWriter c(std::string_view(kMagic, sizeof kMagic), kCheckpointVersion);
+  ContainerWriter c(std::string_view(kCheckpointMagic, sizeof kCheckpointMagic), kCheckpointVersion);
   c.section(ckpt.manifest.dump(1));
   c.section(ckpt.payload);
   write_file_atomic(path, c.finish());  // fsyncs the directory too: the rename is durable
@@ -26,7 +26,7 @@ Checkpoint read_checkpoint(const std::string& path, uint32_t oldest) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw std::runtime_error("cannot open checkpoint '" + path + "'");
   ContainerReader c(f, "checkpoint '" + path + "' is ", true);
-  if (c.magic() != std::string_view(kMagic, sizeof kMagic)) c.fail("not an atacom checkpoint");
+  if (c.magic() != std::string_view(kCheckpointMagic, sizeof kCheckpointMagic)) c.fail("not an atacom checkpoint");
   const uint32_t version = c.version();
   if (version < oldest)
     c.fail("format version " + std::to_string(version) + ", written by an older build; this build reads version " +

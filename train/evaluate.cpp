@@ -8,14 +8,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "src/core/json_number.hpp"
+
 namespace atacom {
 
 namespace {
 constexpr uint64_t kEvalStream = uint64_t{2} << 32;  // episode j's action noise: stream (seed, kEvalStream + j)
 constexpr uint64_t kEvalSeedSalt = 0x5EEDE7A15EEDE7A1ull;
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 }  // namespace
 
 uint64_t eval_env_seed(uint64_t seed, int round) {
@@ -179,5 +178,4 @@ nlohmann::json eval_json(const EvalResult& r) {
   }
   return s;
 }
-
 }  // namespace atacom

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "src/core/binary_io.hpp"
+#include "src/core/json_number.hpp"
 #include "train/ppo_learner.hpp"
 #include "train/sac_learner.hpp"
 
@@ -14,7 +15,6 @@ namespace atacom {
 namespace {
 constexpr uint32_t kTagSacLag = 0x4741534c;  // "LSAG"
 constexpr uint32_t kTagPpoLag = 0x4750504c;  // "LPPG"
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 LagrangianConfig lagrangian_section_of(const LearnerContext& ctx, const std::string& name) {
   if (!ctx.sections || !ctx.sections->contains("lagrangian"))
@@ -138,5 +138,4 @@ std::unique_ptr<Learner> make_ppo_lag_learner(const LearnerContext& ctx, const n
   CostWeightHooks hooks{[p](double w) { p->set_cost_weight(w); }, [] { return true; }};
   return std::make_unique<LagrangianLearner>(ctx, "ppo-lag", kTagPpoLag, std::move(ppo), std::move(hooks), lag);
 }
-
 }  // namespace atacom

@@ -24,7 +24,6 @@ constexpr double kHalfLog2Pi = 0.91893853320467274178;
 constexpr int kMaxRolloutSteps = 100000;
 constexpr int kMaxEpochs = 1000;
 constexpr int kValueChunk = 4096;  // rows per value pass (fixed: the same bits for any rollout size)
-constexpr auto kKeepGrads = Adam<float>::Grads::Keep;
 
 const char* log_std_name(LogStdMode m) {
   return m == LogStdMode::StateDependent ? "state_dependent" : "state_independent";
@@ -362,13 +361,14 @@ void Ppo::step(double lr_actor, double lr_critic) {
     }
     clip_grad_norm(critic_.grads().data(), critic_.grads().size(), cfg_.max_grad_norm);
   }
-  actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), lr_actor, nullptr, 0.0, kKeepGrads);
+  constexpr auto keep = Adam<float>::Grads::Keep;
+  actor_opt_.step_fused(actor_.params().data(), actor_.grads().data(), lr_actor, nullptr, 0.0, keep);
   if (indep) log_std_opt_.step(log_std_.data(), log_std_grad_.data(), lr_actor);
-  critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), lr_critic, nullptr, 0.0, kKeepGrads);
+  critic_opt_.step_fused(critic_.params().data(), critic_.grads().data(), lr_critic, nullptr, 0.0, keep);
   if (cost_) {
     auto& g = cost_->critic.grads();
     if (cfg_.max_grad_norm > 0) clip_grad_norm(g.data(), g.size(), cfg_.max_grad_norm);
-    cost_->opt.step_fused(cost_->critic.params().data(), g.data(), lr_critic, nullptr, 0.0, kKeepGrads);
+    cost_->opt.step_fused(cost_->critic.params().data(), g.data(), lr_critic, nullptr, 0.0, keep);
   }
 }
 

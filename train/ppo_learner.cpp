@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "src/core/binary_io.hpp"
+#include "src/core/json_number.hpp"
 #include "src/core/limits.hpp"
 
 namespace atacom {
@@ -14,10 +15,6 @@ namespace atacom {
 namespace {
 constexpr uint32_t kTagPpoPolicy = 0x50504f50;   // "PPOP"
 constexpr uint32_t kTagPpoLearner = 0x50504f4c;  // "PPOL"
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
 }  // namespace
 
 // ---------------------------------------------------------------- policy
@@ -290,5 +287,4 @@ std::unique_ptr<Learner> make_ppo_learner(const LearnerContext& ctx, const nlohm
 std::unique_ptr<Policy> make_ppo_policy(const EnvSpec& spec, const nlohmann::json& resolved) {
   return std::make_unique<PpoPolicy>(spec, resolved.get<PpoConfig>());
 }
-
 }  // namespace atacom

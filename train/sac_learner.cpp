@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "src/core/binary_io.hpp"
+#include "src/core/json_number.hpp"
 
 namespace atacom {
 
@@ -13,9 +14,6 @@ namespace {
 constexpr uint32_t kTagSacPolicy = 0x53414350;   // "SACP"
 constexpr uint32_t kTagSacLearner = 0x5341434c;  // "SACL"
 constexpr uint64_t kReplayStream = uint64_t{3} << 32;  // replay sampling: stream (seed, kReplayStream)
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 }  // namespace
 
 // ---------------------------------------------------------------- policy
@@ -208,5 +206,4 @@ std::unique_ptr<Learner> make_sac_learner(const LearnerContext& ctx, const nlohm
 std::unique_ptr<Policy> make_sac_policy(const EnvSpec& spec, const nlohmann::json& resolved) {
   return std::make_unique<SacPolicy>(spec, resolved.get<SacConfig>());
 }
-
 }  // namespace atacom

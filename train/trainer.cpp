@@ -21,6 +21,7 @@
 #include "src/core/binary_io.hpp"
 #include "src/core/fs_util.hpp"
 #include "src/core/host_info.hpp"
+#include "src/core/json_number.hpp"
 #include "train/algorithms.hpp"
 #include "train/checkpoint.hpp"
 #include "train/progress_svg.hpp"
@@ -34,15 +35,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 std::string hex(uint64_t h) {
   char b[20];
   std::snprintf(b, sizeof(b), "%016llx", static_cast<unsigned long long>(h));
   return b;
 }
 
-std::string duration(double s) {
+std::string duration_text(double s) {
   if (!std::isfinite(s) || s < 0) return "?";
   char b[32];
   if (s < 60) std::snprintf(b, sizeof(b), "%.0fs", s);
@@ -50,8 +49,6 @@ std::string duration(double s) {
   else std::snprintf(b, sizeof(b), "%dh%02dm", int(s) / 3600, (int(s) % 3600) / 60);
   return b;
 }
-
-nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 class Run {
  public:
@@ -354,7 +351,7 @@ void Run::print_progress(bool force, const EvalResult* ev) {
   const double since = std::chrono::duration<double>(now - eta_t0_).count();
   const double rate = eta_steps0_ >= 0 && since > 0 ? double(c.env_steps - eta_steps0_) / since : 0.0;
   const std::string eta = warming ? std::string("after warm-up")
-                                  : rate > 0 ? duration(double(t.steps - c.env_steps) / rate) : std::string("?");
+                                  : rate > 0 ? duration_text(double(t.steps - c.env_steps) / rate) : std::string("?");
   char b[320];
   if (!learner_ && ev)
     std::snprintf(b, sizeof(b), "%s/%s seed %lld: %d evaluation episodes: return %s  final distance %s  "
@@ -527,7 +524,6 @@ TrainSummary Run::go() {
   }
   return out;
 }
-
 }  // namespace
 
 TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts) {
@@ -551,5 +547,4 @@ TrainSummary run_training(const RunConfig& cfg, const TrainOptions& opts) {
   Run run(cfg, opts);  // builds envs and agent: config errors surface here, before any file is written
   return run.go();
 }
-
 }  // namespace atacom

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 namespace atacom {
@@ -13,9 +14,8 @@ namespace {
 
 using nlohmann::json;
 
-constexpr double kPi = 3.14159265358979323846;
 
-double num(const json& j, const std::string& what) {
+double config_number(const json& j, const std::string& what) {
   if (!j.is_number()) throw std::invalid_argument(what + " must be a number");
   const double v = j.get<double>();
   if (!std::isfinite(v)) throw std::invalid_argument(what + " must be finite");
@@ -26,7 +26,7 @@ std::vector<double> num_array(const json& j, size_t n, const std::string& what) 
   if (!j.is_array() || j.size() != n)
     throw std::invalid_argument(what + " must be an array of " + std::to_string(n) + " numbers");
   std::vector<double> v;
-  for (size_t i = 0; i < n; ++i) v.push_back(num(j[i], what));
+  for (size_t i = 0; i < n; ++i) v.push_back(config_number(j[i], what));
   return v;
 }
 
@@ -50,11 +50,11 @@ ArmRowGroup make_group(size_t rows, double margin, double beta, double slack_tol
           std::vector<double>(rows, tolerance)};
 }
 
-json box_json(const AlignedBox& b) {
+json target_box_json(const AlignedBox& b) {
   return {{"min", {b.min.x(), b.min.y(), b.min.z()}}, {"max", {b.max.x(), b.max.y(), b.max.z()}}};
 }
 
-AlignedBox read_box(const json& j, const std::string& what) {
+AlignedBox read_target_box(const json& j, const std::string& what) {
   ConfigReader r(j, what);
   const auto lo = num_array(r.at("min"), 3, r.path("min")), hi = num_array(r.at("max"), 3, r.path("max"));
   r.finish();
@@ -96,7 +96,7 @@ void set_hri_defaults(ArmEnvConfig& c) {
 // ---------------------------------------------------------------- config
 
 std::string ArmHriConfig::strict_spill_name() const {
-  return "spill_" + std::to_string(std::lround(spill_angle_strict * 180.0 / kPi));
+  return "spill_" + std::to_string(std::lround(spill_angle_strict * 180.0 / std::numbers::pi));
 }
 
 ArmEnvConfig default_arm_env_config(ArmTask task) {
@@ -181,11 +181,11 @@ void ArmEnvConfig::validate() const {
     if (!(hri.theta_max > 0.0 && hri.theta_max < 1.5)) throw std::invalid_argument("config: env.hri.theta_max must be in (0, 1.5) rad");
     if (!(hri.upright.margin[0] >= 0.0 && hri.upright.margin[0] < hri.theta_max))
       throw std::invalid_argument("config: env.hri.upright.margin must be in [0, env.hri.theta_max) rad");
-    if (!(hri.spill_angle > 0.0 && hri.spill_angle < kPi))
+    if (!(hri.spill_angle > 0.0 && hri.spill_angle < std::numbers::pi))
       throw std::invalid_argument("config: env.hri.spill_angle must be in (0, pi) rad");
     if (!(hri.spill_angle_strict > 0.0 && hri.spill_angle_strict < hri.spill_angle))
       throw std::invalid_argument("config: env.hri.spill_angle_strict must be in (0, env.hri.spill_angle) rad");
-    if (!(hri.start_tilt > 0.0 && hri.start_tilt <= kPi))
+    if (!(hri.start_tilt > 0.0 && hri.start_tilt <= std::numbers::pi))
       throw std::invalid_argument("config: env.hri.start_tilt must be in (0, pi] rad (pi: uniform starts)");
     if (!(hri.cup_axis.norm() > 0.5 && hri.cup_axis.norm() < 2.0)) throw std::invalid_argument("config: env.hri.cup_axis must be a unit vector");
     if (!(hri.human_blend >= 0.0 && hri.human_blend < 0.1)) throw std::invalid_argument("config: env.hri.human_blend must be in [0, 0.1) m");
@@ -227,7 +227,7 @@ void to_json(json& j, const ArmEnvConfig& c) {
   if (c.task == ArmTask::Hri) {
     const ArmHriConfig& h = c.hri;
     json targets = json::array();
-    for (const AlignedBox& b : h.targets) targets.push_back(box_json(b));
+    for (const AlignedBox& b : h.targets) targets.push_back(target_box_json(b));
     j["hri"] = {{"upright_row", h.upright_row},
                 {"theta_max", h.theta_max},
                 {"spill_angle", h.spill_angle},
@@ -306,10 +306,10 @@ void from_json(const json& j, ArmEnvConfig& c) {
     if (!ur.is_boolean()) throw std::invalid_argument("config key '" + s.path("upright_row") + "' must be true or false");
     x.upright_row = ur.get<bool>();
     x.theta_max = s.number("theta_max", range::open(0.0, 1.5));
-    x.spill_angle = s.number("spill_angle", range::open(0.0, kPi));
-    x.spill_angle_strict = s.number("spill_angle_strict", range::open(0.0, kPi));
+    x.spill_angle = s.number("spill_angle", range::open(0.0, std::numbers::pi));
+    x.spill_angle_strict = s.number("spill_angle_strict", range::open(0.0, std::numbers::pi));
     s.get("spill_cost", x.spill_cost);  // optional: configs written before it are read unchanged
-    x.start_tilt = s.number("start_tilt", range::open_closed(0.0, kPi));
+    x.start_tilt = s.number("start_tilt", range::open_closed(0.0, std::numbers::pi));
     const auto a = num_array(s.at("cup_axis"), 3, s.path("cup_axis"));
     x.cup_axis = Eigen::Vector3d(a[0], a[1], a[2]);
     x.human = read_group(s.at("human"), kArmPoi, s.path("human"));
@@ -326,7 +326,7 @@ void from_json(const json& j, ArmEnvConfig& c) {
     const json& t = s.at("targets");
     if (!t.is_array() || t.empty()) throw std::invalid_argument("config key '" + s.path("targets") + "' must be a non-empty list of boxes");
     x.targets.clear();
-    for (size_t i = 0; i < t.size(); ++i) x.targets.push_back(read_box(t[i], s.path("targets") + "[" + std::to_string(i) + "]"));
+    for (size_t i = 0; i < t.size(); ++i) x.targets.push_back(read_target_box(t[i], s.path("targets") + "[" + std::to_string(i) + "]"));
     s.finish();
   }
   r.finish();

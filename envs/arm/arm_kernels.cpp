@@ -22,12 +22,11 @@ int64_t now_ns() {
       .count();
 }
 
-constexpr size_t kCapStride = kHumanCapsules * 6;
 
 // Lanes of h hold the humans of envs e0 .. e0 + count - 1.
 void load_humans(const ArmBatch& b, int e0, int count, lanes::HumanCapsLanes& h) {
   const HumanBatch& H = b.human.body;
-  lanes::human_load_caps_lanes(&H.cap[size_t(e0) * kCapStride], &H.cap_vel[size_t(e0) * kCapStride], count, h);
+  lanes::human_load_caps_lanes(&H.cap[size_t(e0) * kHumanCapStride], &H.cap_vel[size_t(e0) * kHumanCapStride], count, h);
   h.pose = &H.pose[size_t(e0) * kHumanPoseDim];
   h.pose_rate = &H.pose_rate[size_t(e0) * kHumanPoseDim];
   h.count = count;
@@ -36,8 +35,8 @@ void load_humans(const ArmBatch& b, int e0, int count, lanes::HumanCapsLanes& h)
 // Every lane of h holds env e's human.
 void splat_human(const ArmBatch& b, int e, lanes::HumanCapsLanes& h) {
   const HumanBatch& H = b.human.body;
-  const double* cap = &H.cap[size_t(e) * kCapStride];
-  const double* vel = &H.cap_vel[size_t(e) * kCapStride];
+  const double* cap = &H.cap[size_t(e) * kHumanCapStride];
+  const double* vel = &H.cap_vel[size_t(e) * kHumanCapStride];
   for (int c = 0; c < kHumanCapsules; ++c)
     for (int r = 0; r < 3; ++r) {
       h.a[c][r] = lanes::splat(cap[c * 6 + r]);
@@ -268,7 +267,7 @@ void step_group(const ArmModel& m, ArmBatch& b, EnvBuffers& B, const double* act
     if (term || trunc) {
       B.episode_return[e] = b.ret[e];
       B.episode_length[e] = b.t[e];
-      if (hri) std::copy_n(&b.human.body.cap[e * kCapStride], kCapStride, &b.human.final_cap[e * kCapStride]);
+      if (hri) std::copy_n(&b.human.body.cap[e * kHumanCapStride], kHumanCapStride, &b.human.final_cap[e * kHumanCapStride]);
       reset_env(m, b, ei, &B.obs[e * d]);
       info[kInfoResetFallback] = b.fallback[e];
     } else {
@@ -417,8 +416,8 @@ void arm_write_obs(const ArmModel& m, const ArmBatch& b, int e, float* obs) {
   }
   if (!m.hri()) return;
   for (int r = 0; r < 3; ++r) obs[16 + r] = static_cast<float>(b.cup[se * 3 + r]);
-  const double* cap = &b.human.body.cap[se * kCapStride];
-  const double* vel = &b.human.body.cap_vel[se * kCapStride];
+  const double* cap = &b.human.body.cap[se * kHumanCapStride];
+  const double* vel = &b.human.body.cap_vel[se * kHumanCapStride];
   for (int c = 0; c < kHumanCapsules; ++c)
     for (int r = 0; r < 3; ++r) {
       obs[19 + c * 3 + r] = static_cast<float>(0.5 * (cap[c * 6 + r] + cap[c * 6 + 3 + r]));

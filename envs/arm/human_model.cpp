@@ -16,7 +16,7 @@ namespace {
 
 using nlohmann::json;
 
-json read_json(const std::string& name) {
+json read_human_json(const std::string& name) {
   const std::string path = data_file(name);
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open '" + path + "'");
@@ -27,7 +27,7 @@ json read_json(const std::string& name) {
   }
 }
 
-Eigen::Vector3d vec3(const json& j, const std::string& what) {
+Eigen::Vector3d human_vec3(const json& j, const std::string& what) {
   if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
     throw std::runtime_error(what + ": expected 3 numbers");
   return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
@@ -80,8 +80,8 @@ double HumanModel::upper(int i) const {
 }
 
 HumanModel load_human_model() {
-  const json sk = read_json("human_skeleton.json");
-  const json dj = read_json("human_dofs.json");
+  const json sk = read_human_json("human_skeleton.json");
+  const json dj = read_human_json("human_dofs.json");
   HumanModel m;
   const std::string where = "human_skeleton.json";
   try {
@@ -89,7 +89,7 @@ HumanModel load_human_model() {
     for (const json& j : sk.at("joints")) {
       HumanJoint hj;
       hj.name = j.at("name").get<std::string>();
-      hj.position = vec3(j.at("position"), where + " joint " + hj.name);
+      hj.position = human_vec3(j.at("position"), where + " joint " + hj.name);
       if (!j.at("parent").is_null()) hj.parent = m.joint_index(j.at("parent").get<std::string>());
       else if (!m.joints.empty()) throw std::runtime_error(where + ": only the first joint may be the root");
       m.joints.push_back(hj);
@@ -98,8 +98,8 @@ HumanModel load_human_model() {
       HumanCapsule c;
       c.name = s.at("name").get<std::string>();
       c.joint = m.joint_index(s.at("attached_to").get<std::string>());
-      c.p0 = vec3(s.at("p0"), where + " segment " + c.name);
-      c.p1 = vec3(s.at("p1"), where + " segment " + c.name);
+      c.p0 = human_vec3(s.at("p0"), where + " segment " + c.name);
+      c.p1 = human_vec3(s.at("p1"), where + " segment " + c.name);
       c.radius = s.at("radius").get<double>();
       if (!(c.radius > 0.0)) throw std::runtime_error(where + " segment " + c.name + ": radius must be > 0");
       m.capsules.push_back(c);

@@ -21,7 +21,7 @@ constexpr const char* kActivityNames[] = {"walk", "reach", "phone", "turn", "pau
 constexpr const char* kSplitNames[] = {"train", "test", "all"};
 constexpr const char* kFormat = "atacom-human-motion";
 
-json vec_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+json point_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 Eigen::Vector3d read_vec(ConfigReader& r, const std::string& key) {
   const json& a = r.at(key);
   if (!a.is_array() || a.size() != 3 || !a[0].is_number() || !a[1].is_number() || !a[2].is_number())
@@ -59,8 +59,8 @@ void to_json(json& j, const HumanMotionConfig& c) {
        {"frames", c.frames},
        {"fps", c.fps},
        {"test_fraction", c.test_fraction},
-       {"table_center", vec_json(c.table_center)},
-       {"table_half", vec_json(c.table_half)},
+       {"table_center", point_json(c.table_center)},
+       {"table_half", point_json(c.table_half)},
        {"clearance", c.clearance},
        {"x_min", c.x_min},
        {"walk_speed_min", c.walk_speed_min},

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <functional>
 #include <stdexcept>
 
@@ -17,7 +18,6 @@ namespace atacom {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 double smooth(double u) {  // minimum-jerk step, S(0) = 0, S(1) = 1
   u = std::clamp(u, 0.0, 1.0);
@@ -28,10 +28,10 @@ double smooth_integral(double u) {  // integral of S from 0 to u
   const double u4 = u * u * u * u;
   return u4 * (2.5 + u * (-3.0 + u));
 }
-double wrap_angle(double a) {  // into (-pi, pi]
-  a = std::fmod(a + kPi, 2.0 * kPi);
-  if (a < 0) a += 2.0 * kPi;
-  return a - kPi;
+double wrap_to_pi(double a) {  // into (-pi, pi]
+  a = std::fmod(a + std::numbers::pi, 2.0 * std::numbers::pi);
+  if (a < 0) a += 2.0 * std::numbers::pi;
+  return a - std::numbers::pi;
 }
 
 using Posture = std::array<double, kHumanDofs>;
@@ -103,8 +103,8 @@ class Generator {
       else if (n.rfind("knee", 0) == 0) amp = 0.008;
       for (auto& w : idle_[static_cast<size_t>(d)]) {
         w[0] = amp / 3.0 * rng_.uniform(0.5, 1.0);
-        w[1] = 2.0 * kPi * rng_.uniform(0.05, 0.35);
-        w[2] = 2.0 * kPi * rng_.uniform();
+        w[1] = 2.0 * std::numbers::pi * rng_.uniform(0.05, 0.35);
+        w[2] = 2.0 * std::numbers::pi * rng_.uniform();
       }
     }
   }
@@ -133,7 +133,7 @@ class Generator {
         case HumanActivity::Walk: walk(); break;
         case HumanActivity::Reach: reach(); break;
         case HumanActivity::Phone: phone(); break;
-        case HumanActivity::Turn: turn_to(s_.yaw + (rng_.uniform() < 0.5 ? -1 : 1) * rng_.uniform(0.5, kPi)); break;
+        case HumanActivity::Turn: turn_to(s_.yaw + (rng_.uniform() < 0.5 ? -1 : 1) * rng_.uniform(0.5, std::numbers::pi)); break;
         case HumanActivity::Pause: hold(rng_.uniform(1.0, 3.0)); break;
       }
       const int end = static_cast<int>(frames_.size() / kHumanPoseDim);
@@ -159,7 +159,7 @@ class Generator {
     Posture a = s_.posture;
     for (int s = 0; s < 2; ++s) {
       const double side = s == 0 ? 1.0 : -1.0;  // the right leg is half a cycle later
-      const double bump = 0.5 * (1.0 + std::cos(ph + (s == 0 ? 0.0 : kPi) + kPi / 4));
+      const double bump = 0.5 * (1.0 + std::cos(ph + (s == 0 ? 0.0 : std::numbers::pi) + std::numbers::pi / 4));
       a[hip_[s]] += g * (0.05 + 0.40 * side * sn);
       a[knee_[s]] += g * (0.03 + 0.85 * bump * bump);
       a[sh_flex_[s]] += g * (-0.25 * side * sn);
@@ -194,7 +194,7 @@ class Generator {
 
   // ------------------------------------------------------------ primitives
   void turn_to(double target) {
-    const double delta = wrap_angle(target - s_.yaw);
+    const double delta = wrap_to_pi(target - s_.yaw);
     if (std::abs(delta) < 0.02) return;
     const double w = rng_.uniform(c_.turn_rate_min, c_.turn_rate_max);
     // Peak yaw rate 1.875 |delta| / T <= w, peak yaw acceleration
@@ -241,7 +241,7 @@ class Generator {
       s.x = from.x() + dir.x() * d;
       s.y = from.y() + dir.y() * d;
       s.gait = sp / 1.2;
-      s.phase_rate = 2.0 * kPi * sp / (0.8 + 0.4 * sp);  // stride 0.8 + 0.4 v m per cycle
+      s.phase_rate = 2.0 * std::numbers::pi * sp / (0.8 + 0.4 * sp);  // stride 0.8 + 0.4 v m per cycle
     });
     s_.x = to.x();
     s_.y = to.y();
@@ -478,7 +478,7 @@ class Generator {
     const double yaw0 = s_.yaw;
     double yaw = yaw0;
     for (int tries = 0; tries < 8 && !ok; ++tries) {
-      yaw = rng_.uniform() < 0.5 ? yaw0 + rng_.uniform(-kPi / 2, kPi / 2) : yaw0;
+      yaw = rng_.uniform() < 0.5 ? yaw0 + rng_.uniform(-std::numbers::pi / 2, std::numbers::pi / 2) : yaw0;
       const int side = rng_.uniform() < 0.5 ? 0 : 1;
       p = neutral_;
       p[sh_flex_[side]] = rng_.uniform(0.2, 0.5);
@@ -504,8 +504,8 @@ class Generator {
     const double T = rng_.uniform(3.0, 8.0), amp = rng_.uniform(0.05, 0.12), f = rng_.uniform(0.1, 0.25);
     const int neck = neck_twist_;
     hold(T, [=](double t, Posture& q) {
-      const double w = std::sin(kPi * t / T);
-      q[neck] += amp * w * w * std::sin(2.0 * kPi * f * t);  // glances around, C2 at both ends
+      const double w = std::sin(std::numbers::pi * t / T);
+      q[neck] += amp * w * w * std::sin(2.0 * std::numbers::pi * f * t);  // glances around, C2 at both ends
     });
     posture_to(lift, rng_.uniform(0.6, 1.0));
     posture_to(neutral_, rng_.uniform(0.6, 0.9));

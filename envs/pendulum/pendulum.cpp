@@ -1,6 +1,7 @@
 #include "envs/pendulum/pendulum.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <istream>
 #include <ostream>
 #include <stdexcept>
@@ -18,7 +19,6 @@
 namespace atacom {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr uint32_t kTagPendulum = snapshot_tag("PEND");
 constexpr uint32_t kTagPendulumState = snapshot_tag("PSTA");
 constexpr int kInfoAbsTheta = 0, kInfoNonfinite = 1;
@@ -76,9 +76,9 @@ void from_json(const nlohmann::json& j, PendulumModel& p) {
 }
 
 double angle_normalize(double x) {
-  double r = std::fmod(x + kPi, 2.0 * kPi);
-  if (r < 0) r += 2.0 * kPi;
-  return r - kPi;
+  double r = std::fmod(x + std::numbers::pi, 2.0 * std::numbers::pi);
+  if (r < 0) r += 2.0 * std::numbers::pi;
+  return r - std::numbers::pi;
 }
 
 PendulumEnv::PendulumEnv(const PendulumModel& model, int num_envs) : model_(model) {
@@ -112,7 +112,7 @@ void PendulumEnv::write_obs(int i, float* obs) const {
 
 void PendulumEnv::reset_one(int i) {
   Rng& r = st_.rng[size_t(i)];
-  st_.theta[size_t(i)] = r.uniform(-kPi, kPi);
+  st_.theta[size_t(i)] = r.uniform(-std::numbers::pi, std::numbers::pi);
   st_.theta_dot[size_t(i)] = r.uniform(-1.0, 1.0);
   st_.t[size_t(i)] = 0;
   st_.ret[size_t(i)] = 0.0;

@@ -15,7 +15,7 @@
 namespace atacom {
 
 namespace {
-constexpr char kMagic[8] = {'A', 'T', 'R', 'D', 'S', 'D', 'F', '1'};
+constexpr char kRedsdfMagic[8] = {'A', 'T', 'R', 'D', 'S', 'D', 'F', '1'};
 constexpr int kMaxWidth = 4096, kMaxLayers = 16, kMaxPose = 512;
 
 void add_layer(std::vector<RedsdfLayer>& v, size_t& n, int in, int out, bool relu) {
@@ -108,7 +108,7 @@ void save_redsdf(const RedsdfModel& m, const std::string& dir) {
   man["arch"] = m.arch;
   man["num_params"] = m.layout.num_params;
   man["format"] = "atacom redsdf v1";
-  ContainerWriter c(std::string_view(kMagic, sizeof kMagic), std::nullopt);
+  ContainerWriter c(std::string_view(kRedsdfMagic, sizeof kRedsdfMagic), std::nullopt);
   c.section(man.dump());
   c.section(std::string_view(reinterpret_cast<const char*>(m.params.data()), m.params.size() * sizeof(float)),
             sizeof(float));
@@ -133,7 +133,7 @@ RedsdfModel load_redsdf(const std::string& dir_or_file, const std::string& expec
   std::ifstream f(path, std::ios::binary);
   if (!f) return fail("cannot be opened (missing? train one with `atacom sdf-train`)");
   ContainerReader c(f, "learned SDF file " + path + ": ", false);
-  if (c.magic() != std::string_view(kMagic, sizeof kMagic)) return fail("not a ReDSDF weight file (bad magic)");
+  if (c.magic() != std::string_view(kRedsdfMagic, sizeof kRedsdfMagic)) return fail("not a ReDSDF weight file (bad magic)");
   c.read({{"manifest"}, {"parameters", sizeof(float)}});
   c.expect_end();
   RedsdfModel m;

@@ -13,7 +13,7 @@ namespace atacom {
 namespace {
 // Pixel coordinates: always a finite number in the file (a value far outside
 // the plot lands far outside the picture, never as "nan" or "inf").
-std::string num(double v) {
+std::string svg_num(double v) {
   char buf[32];
   if (!(v == v)) v = 0;
   std::snprintf(buf, sizeof(buf), "%.2f", std::clamp(v, -1e7, 1e7));
@@ -69,8 +69,8 @@ double SvgCanvas::py(double y) const {
 
 void SvgCanvas::line(double xa, double ya, double xb, double yb, const std::string& color, double stroke,
                      const std::string& dash) {
-  body_ += "<line x1=\"" + num(px(xa)) + "\" y1=\"" + num(py(ya)) + "\" x2=\"" + num(px(xb)) + "\" y2=\"" +
-           num(py(yb)) + "\" stroke=\"" + color + "\" stroke-width=\"" + num(stroke) + "\"" +
+  body_ += "<line x1=\"" + svg_num(px(xa)) + "\" y1=\"" + svg_num(py(ya)) + "\" x2=\"" + svg_num(px(xb)) + "\" y2=\"" +
+           svg_num(py(yb)) + "\" stroke=\"" + color + "\" stroke-width=\"" + svg_num(stroke) + "\"" +
            (dash.empty() ? "" : " stroke-dasharray=\"" + dash + "\"") + "/>\n";
 }
 
@@ -78,29 +78,29 @@ void SvgCanvas::polyline(const std::vector<std::pair<double, double>>& pts, cons
                          double opacity) {
   if (pts.empty()) return;
   std::string p;
-  for (const auto& [x, y] : pts) p += num(px(x)) + "," + num(py(y)) + " ";
-  body_ += "<polyline fill=\"none\" stroke=\"" + color + "\" stroke-width=\"" + num(stroke) + "\" stroke-opacity=\"" +
-           num(opacity) + "\" points=\"" + p + "\"/>\n";
+  for (const auto& [x, y] : pts) p += svg_num(px(x)) + "," + svg_num(py(y)) + " ";
+  body_ += "<polyline fill=\"none\" stroke=\"" + color + "\" stroke-width=\"" + svg_num(stroke) + "\" stroke-opacity=\"" +
+           svg_num(opacity) + "\" points=\"" + p + "\"/>\n";
 }
 
 void SvgCanvas::circle(double x, double y, double r_data, const std::string& fill, const std::string& stroke,
                        double opacity) {
   const double r = double((long double)r_data / ((long double)x1_ - x0_) * (w_ - 2 * m_));
-  body_ += "<circle cx=\"" + num(px(x)) + "\" cy=\"" + num(py(y)) + "\" r=\"" + num(r) + "\" fill=\"" + fill +
-           "\" stroke=\"" + stroke + "\" fill-opacity=\"" + num(opacity) + "\"/>\n";
+  body_ += "<circle cx=\"" + svg_num(px(x)) + "\" cy=\"" + svg_num(py(y)) + "\" r=\"" + svg_num(r) + "\" fill=\"" + fill +
+           "\" stroke=\"" + stroke + "\" fill-opacity=\"" + svg_num(opacity) + "\"/>\n";
 }
 
 void SvgCanvas::polygon(const std::vector<std::pair<double, double>>& pts, const std::string& fill, double opacity) {
   if (pts.empty()) return;
   std::string p;
-  for (const auto& [x, y] : pts) p += num(px(x)) + "," + num(py(y)) + " ";
-  body_ += "<polygon fill=\"" + fill + "\" fill-opacity=\"" + num(opacity) + "\" stroke=\"none\" points=\"" + p + "\"/>\n";
+  for (const auto& [x, y] : pts) p += svg_num(px(x)) + "," + svg_num(py(y)) + " ";
+  body_ += "<polygon fill=\"" + fill + "\" fill-opacity=\"" + svg_num(opacity) + "\" stroke=\"none\" points=\"" + p + "\"/>\n";
 }
 
 void SvgCanvas::rect(double xa, double ya, double xb, double yb, const std::string& fill, const std::string& stroke) {
   const double l = std::min(px(xa), px(xb)), t = std::min(py(ya), py(yb));
-  body_ += "<rect x=\"" + num(l) + "\" y=\"" + num(t) + "\" width=\"" + num(std::abs(px(xb) - px(xa))) +
-           "\" height=\"" + num(std::abs(py(yb) - py(ya))) + "\" fill=\"" + fill + "\" stroke=\"" + stroke + "\"/>\n";
+  body_ += "<rect x=\"" + svg_num(l) + "\" y=\"" + svg_num(t) + "\" width=\"" + svg_num(std::abs(px(xb) - px(xa))) +
+           "\" height=\"" + svg_num(std::abs(py(yb) - py(ya))) + "\" fill=\"" + fill + "\" stroke=\"" + stroke + "\"/>\n";
 }
 
 void SvgCanvas::text(double x, double y, const std::string& s, double size, const std::string& anchor,
@@ -110,9 +110,9 @@ void SvgCanvas::text(double x, double y, const std::string& s, double size, cons
 
 void SvgCanvas::label(double x, double y, const std::string& s, double size, const std::string& anchor,
                       const std::string& color, bool rotate) {
-  body_ += "<text x=\"" + num(x) + "\" y=\"" + num(y) + "\" font-family=\"sans-serif\" font-size=\"" + num(size) +
+  body_ += "<text x=\"" + svg_num(x) + "\" y=\"" + svg_num(y) + "\" font-family=\"sans-serif\" font-size=\"" + svg_num(size) +
            "\" text-anchor=\"" + anchor + "\" fill=\"" + color + "\"" +
-           (rotate ? " transform=\"rotate(-90 " + num(x) + " " + num(y) + ")\"" : "") + ">" + svg_escape(s) +
+           (rotate ? " transform=\"rotate(-90 " + svg_num(x) + " " + svg_num(y) + ")\"" : "") + ">" + svg_escape(s) +
            "</text>\n";
 }
 

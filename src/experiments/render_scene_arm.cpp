@@ -15,22 +15,22 @@ namespace {
 
 using nlohmann::json;
 
-json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+json scene_point_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 // Boxes, vertical cylinders and spheres of a shape union, drawn as class cls.
 void add_shapes(const ShapeUnion& u, const std::string& cls, json& statics) {
   for (const Shape& s : u.shapes) {
     const Eigen::Vector3d a(s.a[0], s.a[1], s.a[2]), h(s.half[0], s.half[1], s.half[2]);
     switch (s.type) {
-      case ShapeType::Box: statics["boxes"].push_back({{"min", vec(a - h)}, {"max", vec(a + h)}, {"cls", cls}}); break;
+      case ShapeType::Box: statics["boxes"].push_back({{"min", scene_point_json(a - h)}, {"max", scene_point_json(a + h)}, {"cls", cls}}); break;
       case ShapeType::CylinderZ:
         statics["cylinders"].push_back(
             {{"c", {a.x(), a.y()}}, {"r", s.radius}, {"z", {a.z() - h.z(), a.z() + h.z()}}, {"cls", cls}});
         break;
-      case ShapeType::Sphere: statics["spheres"].push_back({{"c", vec(a)}, {"r", s.radius}, {"cls", cls}}); break;
+      case ShapeType::Sphere: statics["spheres"].push_back({{"c", scene_point_json(a)}, {"r", s.radius}, {"cls", cls}}); break;
       case ShapeType::Capsule:
         statics["capsules"].push_back(
-            {{"a", vec(a)}, {"b", {s.b[0], s.b[1], s.b[2]}}, {"r", s.radius}, {"cls", cls}});
+            {{"a", scene_point_json(a)}, {"b", {s.b[0], s.b[1], s.b[2]}}, {"r", s.radius}, {"cls", cls}});
         break;
     }
   }
@@ -46,7 +46,7 @@ class ArmRecorder final : public RenderRecorder {
                       {"capsules", json::array()}, {"regions", json::array()}};
     add_shapes(sc.obstacle, "obstacle", scene_.statics);
     add_shapes(sc.body, "body", scene_.statics);
-    scene_.statics["regions"].push_back({{"min", vec(sc.goal_region.min)}, {"max", vec(sc.goal_region.max)}, {"cls", "goal-region"}});
+    scene_.statics["regions"].push_back({{"min", scene_point_json(sc.goal_region.min)}, {"max", scene_point_json(sc.goal_region.max)}, {"cls", "goal-region"}});
     for (const ArmCapsule& c : m.capsules) {
       scene_.capsule_radius.push_back(c.radius);
       scene_.capsule_cls.push_back("link");

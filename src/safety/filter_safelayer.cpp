@@ -16,7 +16,7 @@ using nlohmann::json;
 using filter_json::number;
 using filter_json::per_row;
 
-json status_flags(uint32_t st) {
+json safelayer_status_flags(uint32_t st) {
   json f = json::array();
   if (st & kSafeLayerInfeasible) f.push_back("infeasible");
   if (st & kSafeLayerAlphaNonFinite) f.push_back("alpha_nonfinite");
@@ -86,7 +86,7 @@ json safelayer_filter(const json& j, const ProjectorModel& model, const Projecto
               {"correction", out.correction[0]},
               {"iterations", out.iterations[0]},
               {"status", out.status[0]},
-              {"status_flags", status_flags(out.status[0])}};
+              {"status_flags", safelayer_status_flags(out.status[0])}};
   if (j.contains("id")) res["id"] = j.at("id");
   return res;
 }
