@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Every file of a unity-built target compiles beside every other (the unity
 build's premise, so any batching works): the library's sources (src, kernels,
-envs, train; not src/cli) and the tests (tests/test_*.cpp) each #included
+envs, train), the subcommands (src/cli) and the tests (tests/test_*.cpp) each #included
 into one translation unit and syntax-checked with the flags of that target's
 first unity batch. Files the build compiles alone (their own options or
 definitions) are left out. Usage, after a configure of BUILD:
@@ -37,7 +37,9 @@ def check(target, sources):
 
 lib = [p for d in ("src", "kernels", "envs", "train")
        for p in glob.glob(os.path.join(root, d, "**", "*.cpp"), recursive=True) if "/src/cli/" not in p]
+cli = glob.glob(os.path.join(root, "src", "cli", "*.cpp"))
 tests = glob.glob(os.path.join(root, "tests", "test_*.cpp"))
 failed = check("atacom_lib", lib)
+failed += check("atacom", cli)
 failed += check("atacom_tests", tests)
 sys.exit(1 if failed else 0)

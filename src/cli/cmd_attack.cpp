@@ -77,7 +77,7 @@ int run(const AttackArgs& a) {
   return 0;
 }
 
-const RegisterCommand reg{Command{
+const RegisterCommand register_attack{Command{
     "attack", "train a SAC adversary to break a safety layer: largest constraint value, violations, collisions",
     [](CLI::App& app) -> std::function<int()> {
       auto a = std::make_shared<AttackArgs>();

@@ -15,7 +15,7 @@ struct DemoArgs {
   std::string out = "runs/demo";
 };
 
-atacom::cli::RegisterCommand reg(
+atacom::cli::RegisterCommand register_demo(
     {"demo", "safe exploration demo: many diff-drive robots, random policy, with and without ATACOM",
      [](CLI::App& app) -> std::function<int()> {
        auto args = std::make_shared<DemoArgs>();

@@ -8,7 +8,7 @@
 
 namespace {
 
-atacom::cli::RegisterCommand reg({"filter",
+atacom::cli::RegisterCommand register_filter({"filter",
                                   "project actions with ATACOM: JSON Lines on stdin, one result line per input on stdout",
                                   [](CLI::App& app) -> std::function<int()> {
                                     app.footer("Input/output schema: see the README section 'atacom filter'.");

@@ -19,7 +19,7 @@ std::string manifest_path(const std::string& bin) {
   return (has_ext ? bin.substr(0, dot) : bin) + ".json";
 }
 
-const RegisterCommand reg{{"human-motion",
+const RegisterCommand register_human_motion{{"human-motion",
                            "generate the human motion library (frames FILE, manifest FILE with .json), or --stats",
                            [](CLI::App& app) {
                              auto seed = std::make_shared<uint64_t>(default_human_motion_config().seed);

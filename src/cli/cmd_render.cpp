@@ -18,7 +18,7 @@ struct RenderArgs {
   std::string safety, out, config_file, which = "final";
 };
 
-const RegisterCommand reg{
+const RegisterCommand register_render{
     {"render", "draw one episode as a self-contained HTML page (animated SVG, slider, constraint and reward plots)",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<RenderArgs>();

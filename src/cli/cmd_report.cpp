@@ -8,7 +8,7 @@
 namespace atacom::cli {
 namespace {
 
-const RegisterCommand reg{Command{
+const RegisterCommand register_report{Command{
     "report", "statistics (IQM, bootstrap intervals, P(improvement)), figures and index.html of a sweep directory",
     [](CLI::App& app) -> std::function<int()> {
       auto o = std::make_shared<ReportOptions>();

@@ -43,7 +43,7 @@ int run(RolloutArgs& a) {
   return 0;
 }
 
-atacom::cli::RegisterCommand reg(
+atacom::cli::RegisterCommand register_rollout(
     {"rollout",
      "run an env with a random, zero, linear-attractor or trained policy, through a safety layer or none, and count "
      "collisions and violations",

@@ -9,7 +9,7 @@
 
 namespace {
 
-atacom::cli::RegisterCommand reg(
+atacom::cli::RegisterCommand register_sdf_paths(
     {"sdf-paths", "learned vs analytic distance and gradient along the arm's PoIs in ATACOM rollouts (one JSON line)",
      [](CLI::App& app) -> std::function<int()> {
        auto c = std::make_shared<atacom::SdfPathConfig>();

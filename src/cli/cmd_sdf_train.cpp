@@ -89,7 +89,7 @@ int run(SdfTrainArgs& a) {
   return 0;
 }
 
-atacom::cli::RegisterCommand reg(
+atacom::cli::RegisterCommand register_sdf_train(
     {"sdf-train", "train a learned signed distance field (ReDSDF) of an object from its exact geometry",
      [](CLI::App& app) -> std::function<int()> {
        auto a = std::make_shared<SdfTrainArgs>();

@@ -78,7 +78,7 @@ int run(const Options& o) {
   return 0;
 }
 
-const RegisterCommand reg{{"shelf-real",
+const RegisterCommand register_shelf_real{{"shelf-real",
                            "ShelfEnvReal protocol: two sequential shelf targets per trial, paper's table columns",
                            [](CLI::App& app) -> std::function<int()> {
                              auto o = std::make_shared<Options>();

@@ -70,7 +70,7 @@ int run(const SweepArgs& a) {
   return run_sweep_local(spec, o);
 }
 
-const RegisterCommand reg{Command{
+const RegisterCommand register_sweep{Command{
     "sweep", "run every (env, algo, seed) cell of a sweep spec as an `atacom train` run (resumable); `sweep status DIR`",
     [](CLI::App& app) -> std::function<int()> {
       auto a = std::make_shared<SweepArgs>();

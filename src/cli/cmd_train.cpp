@@ -140,7 +140,7 @@ std::string train_footer() {
          "The full config a run uses: atacom train ... --print-config (docs/training.md lists the keys).";
 }
 
-const RegisterCommand reg{Command{
+const RegisterCommand register_train{Command{
     "train", "train (or, for hand-coded policies, evaluate) an algorithm on a registered env, with checkpoints and resume",
     [](CLI::App& app) -> std::function<int()> {
       auto a = std::make_shared<TrainArgs>();

@@ -22,7 +22,7 @@ int run(ViabilityArgs& a) {
   return 0;
 }
 
-atacom::cli::RegisterCommand reg(
+atacom::cli::RegisterCommand register_viability(
     {"viability",
      "run an env through ATACOM with a random, zero or linear-attractor policy and write down every violating step: "
      "its rows, the correction, the saturated bound, and whether any action in the box would have kept the rows",
