@@ -12,9 +12,6 @@ namespace atacom {
 using lanes::kLanes;
 using lanes::vd;
 
-namespace {
-}
-
 void HumanBatch::resize(int n) {
   if (n < 0) throw std::invalid_argument("HumanBatch: N must be >= 0");
   N = n;

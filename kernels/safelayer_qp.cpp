@@ -364,14 +364,14 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
     double gg = 0.0, r = -h[i], low = -h[i];
     for (int j = 0; j < m; ++j) gg += gi[j] * gi[j], r += gi[j] * a_pi[j], low -= std::fabs(gi[j]);
     if (!(gg > kSafeLayerRowEps * kSafeLayerRowEps)) {
-      stuck = stuck || h[i] < -kTol;
+      stuck = stuck || h[i] < -kSafeLayerFeasTol;
       continue;
     }
     S.kept[kk] = i;
     S.gscale[kk] = std::sqrt(gg);
     ++kk;
-    unreachable = unreachable || low > 2.0 * kTol;
-    if (r > kTol && r / std::sqrt(gg) > worst_dist) worst_dist = r / std::sqrt(gg), worst = i;
+    unreachable = unreachable || low > 2.0 * kSafeLayerFeasTol;
+    if (r > kSafeLayerFeasTol && r / std::sqrt(gg) > worst_dist) worst_dist = r / std::sqrt(gg), worst = i;
   }
   const uint32_t stuck_bit = stuck ? kSafeLayerInfeasible : 0u;
   if (worst < 0) {
@@ -392,7 +392,7 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
     R.iterations = 1;
     bool in_box = true;
     for (int j = 0; j < m; ++j) in_box = in_box && std::fabs(a[j]) <= 1.0;
-    if (in_box && max_row_violation(m, kk, S.kept.data(), g, h, a) <= kTol) {
+    if (in_box && max_row_violation(m, kk, S.kept.data(), g, h, a) <= kSafeLayerFeasTol) {
       if (mult) mult[worst] = lam;
       R.status = stuck_bit;
       return R;
@@ -415,7 +415,7 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
       S.hn[c] = h[i] / S.gscale[c];
     }
     ok = ldp(m, kk, S.gn.data(), S.hn.data(), a_pi, a, S.mu.data(), S, &iters, &limit) && into_box(m, a) &&
-         max_row_violation(m, kk, S.kept.data(), g, h, a) <= kTol;
+         max_row_violation(m, kk, S.kept.data(), g, h, a) <= kSafeLayerFeasTol;
   }
   if (ok) {
     R.iterations = 1 + iters;
@@ -459,7 +459,7 @@ Result solve_m(int m_any, int k, const double* g, const double* h, const double*
                         violation_objective(m, kk, S.kept.data(), g, h, a) * (1.0 + 1e-9) + 1e-300)
     std::copy_n(a2, m, a);
   R.iterations = 1 + iters;
-  const bool violated = max_row_violation(m, kk, S.kept.data(), g, h, a) > kTol;
+  const bool violated = max_row_violation(m, kk, S.kept.data(), g, h, a) > kSafeLayerFeasTol;
   R.status = stuck_bit | (violated ? kSafeLayerInfeasible : 0u) | (limit || limit2 ? kSafeLayerIterationLimit : 0u);
   return R;
 }

@@ -30,9 +30,8 @@ struct Result {
 // this many kept rows; beyond, the candidate vertices outnumber NNLS's work.
 constexpr int kPlanarMaxRows = 16;
 
-// Feasibility tolerance on the raw rows, and the slack by which a solution may
-// leave the box [-1, 1]^m before it is clipped (both paths check the same way).
-constexpr double kTol = kSafeLayerFeasTol;
+// The slack by which a solution may leave the box [-1, 1]^m before it is
+// clipped (both paths check the same way; rows: kSafeLayerFeasTol).
 constexpr double kBoxSlack = 1e-9;
 
 struct Options {

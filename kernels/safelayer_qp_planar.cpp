@@ -60,7 +60,7 @@ int planar_m(int kk, const int* kept, const double* g, const double* hk, const d
     double r = -hk[c];
     for (int j = 0; j < m; ++j) r += gi[j] * a_pi[j];
     q.r = r * inv;
-    if (r > kTol && q.r > far) far = q.r, far_row = c;
+    if (r > kSafeLayerFeasTol && q.r > far) far = q.r, far_row = c;
   }
   for (int j = 0; j < m; ++j) {
     con[kk + j] = {j == 0 ? 1.0 : 0.0, j == 1 ? 1.0 : 0.0, a_pi[j] - 1.0};
@@ -73,7 +73,7 @@ int planar_m(int kk, const int* kept, const double* g, const double* hk, const d
   }
   // A candidate at distance d from a_pi violates the farthest row by at least
   // |g| (far - d): skip it when that exceeds the tolerance.
-  const double d_min = std::max(0.0, far - 2.0 * kTol / gscale[far_row]);
+  const double d_min = std::max(0.0, far - 2.0 * kSafeLayerFeasTol / gscale[far_row]);
   const double d_min2 = d_min * d_min;
   double best = INFINITY;
   int best_s = -1, best_t = -1;
@@ -90,7 +90,7 @@ int planar_m(int kk, const int* kept, const double* g, const double* hk, const d
       const double* gi = g + size_t(kept[c]) * m;
       double r = -hk[c];
       for (int j = 0; j < m; ++j) r += gi[j] * x[j];
-      if (!(r <= kTol)) return false;
+      if (!(r <= kSafeLayerFeasTol)) return false;
     }
     return true;
   };
@@ -166,7 +166,7 @@ bool planar_least_violation_tiebreak(int m, int kk, const int* kept, const doubl
   }
   int first = -1;
   for (int c = 0; c < kk; ++c) {
-    if (!(res[c] > kTol)) continue;
+    if (!(res[c] > kSafeLayerFeasTol)) continue;
     if (m == 1) return true;
     if (first < 0) {
       first = c;
@@ -195,7 +195,7 @@ bool planar_least_violation_tiebreak(int m, int kk, const int* kept, const doubl
   };
   bound(u0, 1.0 - a[0]), bound(-u0, 1.0 + a[0]), bound(u1, 1.0 - a[1]), bound(-u1, 1.0 + a[1]);
   for (int c = 0; c < kk; ++c) {
-    if (res[c] > kTol) continue;  // violated, parallel to n
+    if (res[c] > kSafeLayerFeasTol) continue;  // violated, parallel to n
     const double* gi = g + size_t(kept[c]) * m;
     bound(gi[0] * u0 + gi[1] * u1, std::max(0.0, -res[c]));
   }

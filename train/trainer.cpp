@@ -246,7 +246,7 @@ void Run::record(const EvalResult& ev) {
   if (better) {
     st_.best = eval_json(ev);
     st_.best["env_steps"] = c.env_steps;
-    st_.best["score"] = std::isfinite(score) ? nlohmann::json(score) : nlohmann::json(nullptr);
+    st_.best["score"] = jnum(score);
     if (learner_) write_policy(run_policy_file(RunPolicy::Best));
   }
 }

@@ -22,7 +22,6 @@ int64_t now_ns() {
       .count();
 }
 
-
 // Lanes of h hold the humans of envs e0 .. e0 + count - 1.
 void load_humans(const ArmBatch& b, int e0, int count, lanes::HumanCapsLanes& h) {
   const HumanBatch& H = b.human.body;
